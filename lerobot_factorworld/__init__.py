@@ -1,0 +1,30 @@
+"""Factor World for LeRobot: Meta-World scenes with controlled factors of variation.
+
+Importing the package registers what LeRobot and gymnasium look up by name (the ``factorworld`` env
+type, the gymnasium ids); heavy simulation modules load lazily.
+"""
+
+import os
+
+# Headless rendering by default; must be decided before MuJoCo is first imported.
+os.environ.setdefault("MUJOCO_GL", "egl")
+if os.environ["MUJOCO_GL"] == "egl":
+    os.environ.setdefault("PYOPENGL_PLATFORM", "egl")
+
+from .factors.registry import FACTORS, support_matrix  # noqa: E402
+from .factors.values import FactorValues, SceneConfig, SceneObject, load_configs, save_configs  # noqa: E402
+from .tasks import TASKS, TaskSpec, get_task  # noqa: E402
+
+__all__ = [
+    "FACTORS",
+    "TASKS",
+    "FactorValues",
+    "SceneConfig",
+    "SceneObject",
+    "TaskSpec",
+    "get_task",
+    "load_configs",
+    "save_configs",
+    "support_matrix",
+]
+__version__ = "0.1.0"

@@ -1,0 +1,334 @@
+"""``FactorWorldEnv``: a gymnasium env for one Factor World task under one or more scene configurations.
+
+Description:
+    Wraps Meta-World v3's task logic (dynamics, scripted-expert-compatible state, success test) in a
+    scene compiled by :func:`lerobot_factorworld.scene.build.build_model`, and renders its own cameras
+    with CPU-friendly settings.
+
+Observation space:
+    ``pixels``: dict camera -> uint8 (H, W, 3); ``agent_pos``: float32 (8,) = gripper position and
+    finger opening at the current and at the previous step (the paper's proprioception).
+
+Action space:
+    Box(-1, 1, (4,)): end-effector displacement (x, y, z, 1 cm per unit) and gripper effort.
+
+Rewards:
+    1.0 on a step where the task is solved, else 0.0 (Meta-World's shaped reward is in ``info``).
+
+Starting state:
+    The configuration picked for the episode (``options["config"]``, ``options["env_index"]``,
+    ``seed % len(configs)``, or drawn from the env's RNG) fixes the scene; the object's start offset
+    is re-sampled every episode from the reset seed unless the configuration pins ``object_pos``.
+
+Episode end:
+    Terminates on success (``terminate_on_success``); truncates after ``max_episode_steps``.
+
+Info:
+    ``is_success``, ``factors`` (the values the scene really had, defaults filled in), ``env_id``,
+    ``env_index``, ``metaworld_reward``.
+"""
+
+from __future__ import annotations
+
+from collections import OrderedDict
+from collections.abc import Sequence
+from dataclasses import fields, replace
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+
+from ..factors.registry import FACTORS, factor_range
+from ..factors.values import FactorValues, SceneConfig
+from ..scene.build import DEFAULT_HEADLIGHT, QUALITIES, Quality
+from ..scene.cameras import DEFAULT_CAMERAS, check_camera_names
+from ..tasks import get_task
+
+PER_EPISODE_FACTORS = ("object_pos", "arm_pos")  # applied at reset; everything else is compiled in
+RESERVED_OPTION_PREFIX = "lerobot_"  # LeRobot's rollout passes {"lerobot_new_rollout": True}
+OPTIONS = ("config", "env_index", "factors")
+
+
+class FactorWorldEnv(gym.Env):
+    metadata = {"render_modes": ["rgb_array"], "render_fps": 80}
+
+    def __init__(
+        self,
+        task: str = "pick-place",
+        configs: SceneConfig | Sequence[SceneConfig] | None = None,
+        *,
+        cameras: Sequence[str] | str = DEFAULT_CAMERAS,
+        image_size: int | tuple[int, int] = 84,
+        quality: Quality = "fast",
+        max_episode_steps: int | None = None,
+        object_pos_width: str | None = None,
+        terminate_on_success: bool = True,
+        render_mode: str | None = "rgb_array",
+        scene_cache_size: int = 4,
+    ) -> None:
+        self.task_spec = get_task(task)
+        self.configs = _as_configs(self.task_spec.name, configs)
+        self.cameras = check_camera_names([cameras] if isinstance(cameras, str) else list(cameras))
+        self.image_size = (image_size, image_size) if isinstance(image_size, int) else tuple(image_size)
+        if min(self.image_size) < 8:
+            raise ValueError(f"image_size must be at least 8 pixels, got {image_size!r}")
+        if quality not in QUALITIES:
+            raise ValueError(f"unknown render quality {quality!r}; valid: {', '.join(QUALITIES)}")
+        if render_mode not in (None, *self.metadata["render_modes"]):
+            raise ValueError(f"unsupported render_mode {render_mode!r}; valid: {self.metadata['render_modes']}")
+        self.quality = quality
+        self.object_pos_range = factor_range(self.task_spec, "object_pos", object_pos_width)
+        self.terminate_on_success = terminate_on_success
+        self.render_mode = render_mode
+        self._max_episode_steps = int(max_episode_steps or self.task_spec.max_episode_steps)
+        self.task = self.task_spec.name
+        self.task_description = self.configs[0].task_description
+
+        h, w = self.image_size
+        self.observation_space = gym.spaces.Dict(
+            {
+                "pixels": gym.spaces.Dict(
+                    {cam: gym.spaces.Box(0, 255, (h, w, 3), dtype=np.uint8) for cam in self.cameras}
+                ),
+                "agent_pos": gym.spaces.Box(-np.inf, np.inf, (8,), dtype=np.float32),
+            }
+        )
+        self.action_space = gym.spaces.Box(-1.0, 1.0, (4,), dtype=np.float32)
+
+        self._scenes: OrderedDict[FactorValues, _Scene] = OrderedDict()
+        self._scene_cache_size = max(1, scene_cache_size)
+        self._scene: _Scene | None = None
+        self._config: SceneConfig | None = None
+        self._steps = 0
+        self._last_frame: np.ndarray | None = None
+        self._episode_factors: dict[str, Any] = {}
+        self._env_index = 0
+
+    # --- gymnasium API ------------------------------------------------------------------------
+
+    def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None):
+        super().reset(seed=seed)
+        config, index = self._select_config(seed, options or {})
+        factors = config.factors
+        object_offset = factors.object_pos
+        if object_offset is None:
+            low, high = self.object_pos_range
+            object_offset = tuple(float(v) for v in self.np_random.uniform(low, high))
+        scene = self._scene_for(factors)
+        scene.reset(object_offset, factors.arm_pos or (0.0, 0.0, 0.0))
+        self._scene, self._config, self._env_index, self._steps = scene, config, index, 0
+        self.task_description = config.task_description
+        self._episode_factors = resolved_factors(config, object_offset)
+        obs = self._observe(scene.metaworld_obs)
+        return obs, self._info(success=False, metaworld_reward=0.0)
+
+    def step(self, action: np.ndarray):
+        if self._scene is None:
+            raise RuntimeError("call reset() before step()")
+        action = np.asarray(action, dtype=np.float32).reshape(4)
+        mw_obs, mw_reward, _, _, mw_info = self._scene.env.step(np.clip(action, -1.0, 1.0))
+        self._scene.metaworld_obs = mw_obs
+        self._steps += 1
+        success = bool(mw_info["success"])
+        obs = self._observe(mw_obs)
+        terminated = success and self.terminate_on_success
+        truncated = self._steps >= self._max_episode_steps
+        return obs, float(success), terminated, truncated, self._info(success, float(mw_reward))
+
+    def render(self) -> np.ndarray | None:
+        """The first camera's latest frame (already rendered for the observation: no second render)."""
+        if self.render_mode is None:
+            return None
+        if self._last_frame is None:
+            raise RuntimeError("call reset() before render()")
+        return self._last_frame.copy()
+
+    def close(self) -> None:
+        for scene in self._scenes.values():
+            scene.close()
+        self._scenes.clear()
+        self._scene = None
+
+    # --- introspection ------------------------------------------------------------------------
+
+    @property
+    def model(self):
+        """The current scene's ``MjModel`` (after reset)."""
+        return None if self._scene is None else self._scene.env.model
+
+    @property
+    def data(self):
+        return None if self._scene is None else self._scene.env.data
+
+    @property
+    def metaworld_env(self):
+        """The wrapped Meta-World task env (scripted experts read its state)."""
+        return None if self._scene is None else self._scene.env
+
+    @property
+    def state_observation(self) -> np.ndarray:
+        """Meta-World's 39-dim state vector (object and goal poses): what scripted experts act on."""
+        if self._scene is None or self._scene.metaworld_obs is None:
+            raise RuntimeError("call reset() first")
+        return self._scene.metaworld_obs.copy()
+
+    @property
+    def config(self) -> SceneConfig | None:
+        return self._config
+
+    @property
+    def episode_factors(self) -> dict[str, Any]:
+        return dict(self._episode_factors)
+
+    # --- internals ----------------------------------------------------------------------------
+
+    def _select_config(self, seed: int | None, options: dict[str, Any]) -> tuple[SceneConfig, int]:
+        unknown = [k for k in options if k not in OPTIONS and not k.startswith(RESERVED_OPTION_PREFIX)]
+        if unknown:
+            raise ValueError(f"unknown reset option(s) {unknown}; valid options: {', '.join(OPTIONS)}")
+        index = -1
+        if options.get("config") is not None:
+            config = options["config"]
+            config = SceneConfig.from_dict(config) if isinstance(config, dict) else config
+            if config.task != self.task:
+                raise ValueError(f"config is for task {config.task!r} but this env runs {self.task!r}")
+        else:
+            if options.get("env_index") is not None:
+                index = int(options["env_index"])
+                if not 0 <= index < len(self.configs):
+                    raise ValueError(f"env_index {index} out of range; this env has {len(self.configs)} configs")
+            elif seed is not None:
+                index = seed % len(self.configs)
+            else:
+                index = int(self.np_random.integers(len(self.configs)))
+            config = self.configs[index]
+        if options.get("factors"):
+            config = config.with_factors(**options["factors"])
+        return config, index
+
+    def _scene_for(self, factors: FactorValues) -> _Scene:
+        key = replace(factors, **{name: None for name in PER_EPISODE_FACTORS})
+        scene = self._scenes.pop(key, None)
+        if scene is None:
+            scene = _Scene(self.task_spec, key, self.cameras, self.quality, self.image_size)
+            while len(self._scenes) >= self._scene_cache_size:
+                _, old = self._scenes.popitem(last=False)
+                old.close()
+        self._scenes[key] = scene
+        return scene
+
+    def _observe(self, mw_obs: np.ndarray) -> dict[str, Any]:
+        assert self._scene is not None
+        pixels = self._scene.render_all()
+        self._last_frame = pixels[self.cameras[0]]
+        agent_pos = np.concatenate([mw_obs[0:4], mw_obs[18:22]]).astype(np.float32)
+        return {"pixels": pixels, "agent_pos": agent_pos}
+
+    def _info(self, success: bool, metaworld_reward: float) -> dict[str, Any]:
+        assert self._config is not None
+        return {
+            "is_success": success,
+            "metaworld_reward": metaworld_reward,
+            "factors": dict(self._episode_factors),
+            "env_id": self._config.env_id,
+            "env_index": self._env_index,
+        }
+
+
+class _Scene:
+    """One compiled scene: a Meta-World task env on our model, plus a renderer for our cameras."""
+
+    def __init__(self, task, factors: FactorValues, cameras, quality, image_size) -> None:
+        from ..scene.build import build_model, resting_height_shift
+        from .metaworld_bridge import make_metaworld_env
+
+        self.task = task
+        self.cameras = cameras
+        self.model = build_model(task, factors, cameras, quality, image_size)
+        self.env = make_metaworld_env(task, self.model)
+        self.rest_shift = resting_height_shift(task, factors)
+        self.image_size = image_size
+        self._renderer = None
+        self.metaworld_obs: np.ndarray | None = None
+
+    def reset(self, object_offset: Sequence[float], arm_offset: Sequence[float]) -> None:
+        from .metaworld_bridge import reset_metaworld
+
+        self.metaworld_obs = reset_metaworld(self.env, self.task, object_offset, arm_offset, self.rest_shift)
+
+    def render_all(self) -> dict[str, np.ndarray]:
+        import mujoco
+
+        if self._renderer is None:
+            h, w = self.image_size
+            self._renderer = mujoco.Renderer(self.model, height=h, width=w)
+        frames = {}
+        for cam in self.cameras:
+            self._renderer.update_scene(self.env.data, camera=cam)
+            frames[cam] = self._renderer.render()
+        return frames
+
+    def close(self) -> None:
+        if self._renderer is not None:
+            self._renderer.close()
+            self._renderer = None
+        self.env.close()
+
+
+def _as_configs(task: str, configs: SceneConfig | Sequence[SceneConfig] | None) -> tuple[SceneConfig, ...]:
+    if configs is None:
+        return (SceneConfig(task),)
+    if isinstance(configs, (SceneConfig, dict)):
+        configs = [configs]
+    out = tuple(SceneConfig.from_dict(c) if isinstance(c, dict) else c for c in configs)
+    if not out:
+        raise ValueError("configs must hold at least one SceneConfig")
+    wrong = sorted({c.task for c in out if c.task != task})
+    if wrong:
+        raise ValueError(f"configs for task(s) {wrong} given to a {task!r} env")
+    return out
+
+
+def resolved_factors(config: SceneConfig, object_offset: Sequence[float]) -> dict[str, Any]:
+    """The values the scene really has: the configuration with defaults filled in (JSON-able)."""
+    from ..factors.registry import support_reason
+
+    f = config.factors
+    out: dict[str, Any] = {}
+    for field_ in fields(f):
+        name = field_.name
+        value = getattr(f, name)
+        if support_reason(name, config.task):
+            out[name] = None
+            continue
+        if name == "object_pos":
+            value = tuple(float(v) for v in object_offset)
+        elif value is None:
+            value = _DEFAULTS[name]
+        out[name] = value
+    return FactorValues.to_dict(FactorValues()) | {k: _jsonable(v) for k, v in out.items()}
+
+
+_DEFAULTS: dict[str, Any] = {
+    "arm_pos": (0.0, 0.0, 0.0),
+    "camera_pos": (0.0,) * 7,
+    "table_pos": (0.0, 0.0, 0.0),
+    "object_size": 1.0,
+    "object_shape": "default",
+    "object_texture": "default",
+    "table_texture": "default",
+    "floor_texture": "default",
+    "light": DEFAULT_HEADLIGHT,
+    "distractors": (),
+}
+assert set(_DEFAULTS) | {"object_pos"} == set(FACTORS)
+
+
+def _jsonable(value: Any) -> Any:
+    from dataclasses import asdict, is_dataclass
+
+    if is_dataclass(value):
+        return asdict(value)
+    if isinstance(value, (tuple, list)):
+        return [_jsonable(v) for v in value]
+    return value

@@ -1,0 +1,193 @@
+"""Value types: what one environment configuration holds, as plain frozen data (no MuJoCo).
+
+A :class:`SceneConfig` is a value: it can be compared, hashed, printed, saved to JSON and loaded
+back. ``None`` for a factor means "the task's default scene" (for ``object_pos``: re-randomised every
+episode from the reset seed, as in the paper).
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import asdict, dataclass, field, fields, replace
+from pathlib import Path
+from typing import Any
+
+Vec2 = tuple[float, float]
+Vec3 = tuple[float, float, float]
+
+
+@dataclass(frozen=True)
+class SceneObject:
+    """A rigid object standing on the table: a distractor (or, for multi-object tasks, a named item).
+
+    Positions are in the table frame (metres from the table centre), so objects move with the table.
+    """
+
+    shape: str
+    x: float
+    y: float
+    yaw: float
+    size: float
+    texture: str
+    name: str = ""
+
+
+@dataclass(frozen=True)
+class FactorValues:
+    """One value per factor of variation; ``None`` keeps the task's default scene."""
+
+    object_pos: Vec2 | None = None
+    arm_pos: Vec3 | None = None
+    camera_pos: tuple[float, ...] | None = None
+    table_pos: Vec3 | None = None
+    object_size: float | None = None
+    object_shape: str | None = None
+    object_texture: str | None = None
+    table_texture: str | None = None
+    floor_texture: str | None = None
+    light: Vec2 | None = None
+    distractors: tuple[SceneObject, ...] | None = None
+
+    def __post_init__(self) -> None:
+        from .registry import validate_value
+
+        for f in fields(self):
+            value = getattr(self, f.name)
+            if value is None:
+                continue
+            object.__setattr__(self, f.name, validate_value(f.name, value))
+
+    def set(self, **values: Any) -> FactorValues:
+        """A copy with some factors replaced (validated like the constructor)."""
+        from .registry import check_factor_names
+
+        check_factor_names(values)
+        return replace(self, **values)
+
+    def non_default(self) -> dict[str, Any]:
+        """The factors that differ from the default scene."""
+        return {f.name: getattr(self, f.name) for f in fields(self) if getattr(self, f.name) is not None}
+
+    def to_dict(self) -> dict[str, Any]:
+        return {name: _to_jsonable(value) for name, value in asdict(self).items()}
+
+    @classmethod
+    def from_dict(cls, data: dict[str, Any]) -> FactorValues:
+        from .registry import check_factor_names
+
+        check_factor_names(data)
+        values = dict(data)
+        if values.get("distractors") is not None:
+            values["distractors"] = tuple(
+                item if isinstance(item, SceneObject) else SceneObject(**item) for item in values["distractors"]
+            )
+        return cls(**values)
+
+
+@dataclass(frozen=True)
+class SceneConfig:
+    """One Factor World environment: a task plus one value per factor.
+
+    Attributes:
+        task: Task name (see :data:`lerobot_factorworld.tasks.TASKS`).
+        factors: The factor values.
+        instruction: Language instruction; ``None`` uses the task's own.
+        split: Asset split the values were drawn from (``train`` or ``eval``); metadata only.
+        env_id: Identifier of this environment within a study, e.g. ``pick-place/train/003``.
+    """
+
+    task: str
+    factors: FactorValues = field(default_factory=FactorValues)
+    instruction: str | None = None
+    split: str = "train"
+    env_id: str = ""
+
+    def __post_init__(self) -> None:
+        from ..tasks import get_task
+        from .registry import SPLITS, check_task_support
+
+        task = get_task(self.task)
+        object.__setattr__(self, "task", task.name)
+        if self.split not in SPLITS:
+            raise ValueError(f"unknown split {self.split!r}; valid splits: {', '.join(SPLITS)}")
+        if isinstance(self.factors, dict):
+            object.__setattr__(self, "factors", FactorValues.from_dict(self.factors))
+        check_task_support(task, self.factors.non_default())
+
+    @property
+    def task_description(self) -> str:
+        from ..tasks import get_task
+
+        return self.instruction or get_task(self.task).instruction
+
+    def with_factors(self, **values: Any) -> SceneConfig:
+        return replace(self, factors=self.factors.set(**values))
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "task": self.task,
+            "factors": self.factors.to_dict(),
+            "instruction": self.instruction,
+            "split": self.split,
+            "env_id": self.env_id,
+        }
+
+    @classmethod
+    def from_dict(cls, data: dict[str, Any]) -> SceneConfig:
+        unknown = set(data) - {f.name for f in fields(cls)}
+        if unknown:
+            raise ValueError(f"unknown SceneConfig keys {sorted(unknown)}; valid keys: {[f.name for f in fields(cls)]}")
+        values = dict(data)
+        values["factors"] = FactorValues.from_dict(values.get("factors") or {})
+        return cls(**values)
+
+    def to_json(self) -> str:
+        return json.dumps(self.to_dict(), sort_keys=True)
+
+    def __str__(self) -> str:
+        lines = [f"SceneConfig {self.env_id or '(unnamed)'}: task={self.task} split={self.split}"]
+        for name, value in self.factors.non_default().items():
+            lines.append(f"  {name:15s} {_format(value)}")
+        if len(lines) == 1:
+            lines.append("  (default scene)")
+        return "\n".join(lines)
+
+
+def save_configs(configs: list[SceneConfig] | tuple[SceneConfig, ...], path: str | Path) -> Path:
+    """Write configurations as a JSON list (atomically: a crash never leaves half a file)."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_suffix(path.suffix + ".tmp")
+    tmp.write_text(json.dumps([c.to_dict() for c in configs], indent=1, sort_keys=True))
+    tmp.replace(path)
+    return path
+
+
+def load_configs(path: str | Path) -> list[SceneConfig]:
+    path = Path(path)
+    if not path.is_file():
+        raise FileNotFoundError(f"no configuration file at {path}")
+    data = json.loads(path.read_text())
+    if isinstance(data, dict):
+        data = [data]
+    return [SceneConfig.from_dict(item) for item in data]
+
+
+def _to_jsonable(value: Any) -> Any:
+    if isinstance(value, (tuple, list)):
+        return [_to_jsonable(v) for v in value]
+    if isinstance(value, dict):
+        return {k: _to_jsonable(v) for k, v in value.items()}
+    return value
+
+
+def _format(value: Any) -> str:
+    if isinstance(value, float):
+        return f"{value:.4g}"
+    if isinstance(value, SceneObject):
+        return f"{value.shape}@({value.x:+.3f},{value.y:+.3f}) size={value.size:.3f} tex={value.texture}"
+    if isinstance(value, tuple) and value and isinstance(value[0], SceneObject):
+        return "; ".join(_format(v) for v in value)
+    if isinstance(value, tuple):
+        return "(" + ", ".join(_format(v) for v in value) + ")"
+    return str(value)

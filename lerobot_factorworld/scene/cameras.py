@@ -1,0 +1,61 @@
+"""Scene cameras Factor World adds to every task, defined by position and look-at target.
+
+They are world-fixed (the camera factor perturbs their pose; the table factor moves the table, not
+them). Images are upright, unlike Meta-World's ``corner2`` which LeRobot has to flip.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+
+@dataclass(frozen=True)
+class CameraSpec:
+    name: str
+    pos: tuple[float, float, float]
+    target: tuple[float, float, float]
+    fovy: float = 45.0
+
+    def quat(self) -> np.ndarray:
+        """MuJoCo (w, x, y, z) orientation looking from ``pos`` at ``target`` with world z up."""
+        return look_at_quat(np.asarray(self.pos, float), np.asarray(self.target, float))
+
+
+def look_at_quat(pos: np.ndarray, target: np.ndarray) -> np.ndarray:
+    import mujoco
+
+    forward = target - pos
+    forward /= np.linalg.norm(forward)
+    right = np.cross(forward, np.array([0.0, 0.0, 1.0]))
+    right /= np.linalg.norm(right)
+    up = np.cross(right, forward)
+    mat = np.stack([right, up, -forward], axis=1)  # camera axes as columns: x right, y up, looks along -z
+    quat = np.zeros(4)
+    mujoco.mju_mat2Quat(quat, mat.flatten())
+    return quat
+
+
+CAMERAS: dict[str, CameraSpec] = {
+    cam.name: cam
+    for cam in (
+        # Facing the robot from the far side of the table, like Factor World's "movable" camera.
+        CameraSpec("front", pos=(-0.55, 1.55, 0.85), target=(0.0, 0.55, 0.0), fovy=45.0),
+        # From the robot's right shoulder, looking across the workspace.
+        CameraSpec("side", pos=(0.95, 0.05, 0.75), target=(0.0, 0.65, 0.0), fovy=45.0),
+        # Straight down on the workspace.
+        CameraSpec("top", pos=(0.0, 0.5, 1.4), target=(0.0, 0.65, 0.0), fovy=45.0),
+    )
+}
+"""Factor World's scene cameras by name; ``front`` is the default observation camera."""
+
+DEFAULT_CAMERAS = ("front",)
+
+
+def check_camera_names(names: tuple[str, ...] | list[str]) -> tuple[str, ...]:
+    names = tuple(names)
+    unknown = [n for n in names if n not in CAMERAS]
+    if unknown or not names:
+        raise ValueError(f"unknown camera(s) {unknown or names!r}; valid cameras: {', '.join(CAMERAS)}")
+    return names

@@ -1,0 +1,93 @@
+"""The Factor World task list: one frozen row per task, the single source of truth for task facts.
+
+Every row names the Meta-World v3 environment and scripted expert it wraps, the natural-language
+instruction, and what the task's *object* is, so that object factors (texture, size, shape, position)
+act on every task and not only on pick-place.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+
+@dataclass(frozen=True)
+class TaskSpec:
+    """Static facts about one Factor World task.
+
+    Attributes:
+        name: Factor World task name (Meta-World name without the ``-v3`` suffix).
+        instruction: Natural-language instruction given to language-conditioned policies.
+        object_bodies: Root bodies of the manipulated object; their whole subtree is "the object"
+            (its visual geoms take the object texture).
+        object_is_free: Whether the object is a loose rigid body (free joint). Only loose objects can
+            be resized or reshaped without changing the task's mechanics.
+        max_episode_steps: Horizon used for evaluation and collection (Meta-World's own cap is 500).
+        nominal_object_xy: The object's nominal start (x, y) when it is not the centre of Meta-World's
+            random reset range: pick-place and basketball need the object at least 0.15 m from the goal.
+        limits: Per-factor boxes ``(factor, (low, high))`` where this task stays solvable by its
+            scripted expert (bin walls, reach, the hoop's size); the factor's ranges are intersected
+            with them and explicit values outside them are rejected.
+    """
+
+    name: str
+    instruction: str
+    object_bodies: tuple[str, ...]
+    object_is_free: bool = False
+    max_episode_steps: int = 500
+    nominal_object_xy: tuple[float, float] | None = None
+    limits: tuple[tuple[str, tuple[tuple[float, ...], tuple[float, ...]]], ...] = ()
+
+    def limit(self, factor: str) -> tuple[tuple[float, ...], tuple[float, ...]] | None:
+        return dict(self.limits).get(factor)
+
+    @property
+    def metaworld_name(self) -> str:
+        return f"{self.name}-v3"
+
+    @property
+    def gym_id(self) -> str:
+        return f"FactorWorld/{self.name}-v0"
+
+
+_ROWS = (
+    TaskSpec("pick-place", "pick up the puck and place it at the blue goal", ("obj",), True, nominal_object_xy=(0.0, 0.6)),
+    TaskSpec(
+        "basketball", "dunk the basketball into the hoop", ("bsktball",), True, nominal_object_xy=(0.0, 0.6),
+        limits=(("object_size", ((0.7,), (1.1,))),),
+    ),
+    TaskSpec(
+        "bin-picking", "move the block from the red bin into the blue bin", ("obj",), True,
+        limits=(("object_pos", ((-0.05, -0.04), (0.05, 0.04))), ("object_size", ((0.8,), (1.3,)))),
+    ),
+    TaskSpec("button-press", "press the button from the front", ("box",)),
+    TaskSpec("button-press-topdown", "press the button from the top", ("box",)),
+    TaskSpec("button-press-topdown-wall", "reach over the wall and press the button from the top", ("box",)),
+    TaskSpec(
+        "button-press-wall", "reach around the wall and press the button", ("box",),
+        limits=(("object_pos", ((-0.05, -0.025), (0.05, 0.075))),),
+    ),
+    TaskSpec("door-lock", "lock the door by turning the lock", ("door",)),
+    TaskSpec("door-open", "open the door", ("door",), limits=(("object_pos", ((-0.05, -0.03), (0.1, 0.075))),)),
+    TaskSpec("door-unlock", "unlock the door by turning the lock", ("door",)),
+    TaskSpec("drawer-close", "push the drawer closed", ("drawer",), limits=(("object_pos", ((-0.1, -0.075), (0.1, 0.02))),)),
+    TaskSpec("drawer-open", "pull the drawer open", ("drawer",)),
+    TaskSpec("faucet-close", "turn the faucet handle to close it", ("faucetBase",)),
+    TaskSpec("faucet-open", "turn the faucet handle to open it", ("faucetBase",)),
+    TaskSpec("handle-press", "press the handle down", ("box",)),
+    TaskSpec("handle-pull", "pull the handle up", ("box",)),
+    TaskSpec("handle-pull-side", "pull the side handle up", ("box",)),
+    TaskSpec("lever-pull", "pull the lever", ("lever",), limits=(("object_pos", ((-0.1, -0.06), (0.1, 0.075))),)),
+    TaskSpec("window-close", "slide the window closed", ("window",)),
+    TaskSpec("window-open", "slide the window open", ("window",)),
+)
+
+TASKS: dict[str, TaskSpec] = {row.name: row for row in _ROWS}
+"""All tasks by name, in the order of the public Factor World README."""
+
+
+def get_task(name: str) -> TaskSpec:
+    """Look a task up by name; accepts the Meta-World ``-v3`` spelling too."""
+    key = name.removesuffix("-v3")
+    if key not in TASKS:
+        raise ValueError(f"unknown task {name!r}; valid tasks: {', '.join(TASKS)}")
+    return TASKS[key]

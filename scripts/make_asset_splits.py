@@ -1,0 +1,50 @@
+"""Regenerate lerobot_factorworld/assets/asset_splits.json, the single source of the built-in splits.
+
+Deterministic: running it twice writes identical bytes. Run it after adding families, changing
+VARIANTS_PER_FAMILY, the curated Meta-World lists or TRAIN_FRACTION; tests fail until the file matches.
+
+    python scripts/make_asset_splits.py [--check]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
+from lerobot_factorworld.assets.library import KINDS, SPLITS, SPLITS_FILE, builtin_splits_document  # noqa: E402
+
+
+def render() -> str:
+    """The exact text of the splits file."""
+    return json.dumps(builtin_splits_document(), indent=1, sort_keys=True) + "\n"
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--check", action="store_true", help="only verify the committed file is up to date")
+    args = parser.parse_args()
+    text = render()
+    doc = json.loads(text)
+    for kind in KINDS:
+        counts = doc["counts"][kind]
+        print(
+            f"{kind:8s} " + "  ".join(f"{s}={counts[s]}" for s in SPLITS) + f"  total={sum(counts.values())}"
+        )
+    current = SPLITS_FILE.read_text(encoding="utf-8") if SPLITS_FILE.exists() else None
+    if args.check:
+        if current != text:
+            print(f"{SPLITS_FILE} is out of date; run: python scripts/make_asset_splits.py", file=sys.stderr)
+            return 1
+        print(f"{SPLITS_FILE} is up to date")
+        return 0
+    SPLITS_FILE.write_text(text, encoding="utf-8")
+    print(f"wrote {SPLITS_FILE} (sha256 of lists {doc['sha256'][:16]}...)")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
