@@ -1,3 +1,4 @@
-"""Import hook for LeRobot's plugin discovery (distributions named ``lerobot_env_*`` are imported)."""
+"""Import hook for LeRobot's plugin discovery: LeRobot imports every installed ``lerobot_env_*``
+distribution by name, and this module registers Factor World's env type and policies."""
 
-import lerobot_factorworld  # noqa: F401  (registers the factorworld env type and the rt1 policy)
+import lerobot_factorworld.lerobot_plugin  # noqa: F401

@@ -1,7 +1,9 @@
 """Factor World for LeRobot: Meta-World scenes with controlled factors of variation.
 
-Importing the package registers what LeRobot and gymnasium look up by name (the ``factorworld`` env
-type, the gymnasium ids); heavy simulation modules load lazily.
+Importing the package registers the gymnasium ids ``FactorWorld/<task>-v0`` and stays light (no
+torch, no LeRobot). LeRobot's ``factorworld`` env type and ``rt1`` policy are registered by
+:mod:`lerobot_factorworld.lerobot_plugin`, which LeRobot's plugin discovery imports through the
+``lerobot_env_factorworld`` distribution.
 """
 
 import os
@@ -13,7 +15,10 @@ if os.environ["MUJOCO_GL"] == "egl":
 
 from .factors.registry import FACTORS, support_matrix  # noqa: E402
 from .factors.values import FactorValues, SceneConfig, SceneObject, load_configs, save_configs  # noqa: E402
+from .envs.registration import register_envs  # noqa: E402
 from .tasks import TASKS, TaskSpec, get_task  # noqa: E402
+
+register_envs()
 
 __all__ = [
     "FACTORS",

@@ -147,7 +147,7 @@ def asset_kind(name: str) -> AssetKind:
     """``"texture"`` or ``"shape"`` for a valid asset name (from the family or the file extension)."""
     scheme, _, rest = name.partition(":")
     if scheme == "proc":
-        family = _proc_family(name)[0]
+        family = _proc_family(name)
         return "texture" if family in TEXTURE_FAMILIES else "shape"
     if scheme in ("metaworld", "file"):
         suffix = Path(rest).suffix.lower()
@@ -161,7 +161,7 @@ def asset_kind(name: str) -> AssetKind:
     raise ValueError(f"unknown asset name {name!r}; {_NAME_HELP}")
 
 
-def _proc_family(name: str) -> tuple[str, int]:
+def _proc_family(name: str) -> str:
     m = _PROC_RE.match(name)
     if m is None:
         raise ValueError(
@@ -173,7 +173,7 @@ def _proc_family(name: str) -> tuple[str, int]:
             f"unknown procedural family {family!r} in {name!r}; "
             f"texture families: {', '.join(TEXTURE_FAMILIES)}; shape families: {', '.join(SHAPE_FAMILIES)}"
         )
-    return family, int(m.group(2))
+    return family
 
 
 def _file_path(name: str, kind: AssetKind) -> Path:
@@ -206,7 +206,7 @@ def _file_path(name: str, kind: AssetKind) -> Path:
 @functools.lru_cache(maxsize=1024)
 def _texture_cached(name: str, size: int) -> np.ndarray:
     if name.startswith("proc:"):
-        family, _ = _proc_family(name)
+        family = _proc_family(name)
         if family not in TEXTURE_FAMILIES:
             raise ValueError(
                 f"{name!r} is a shape, not a texture; texture families: {', '.join(TEXTURE_FAMILIES)}"
@@ -214,9 +214,13 @@ def _texture_cached(name: str, size: int) -> np.ndarray:
         img = generate_texture(family, stable_seed(name), size)
     else:
         path = _file_path(name, "texture")
-        with Image.open(path) as im:
-            img = np.asarray(im.convert("RGB").resize((size, size), Image.Resampling.LANCZOS), dtype=np.uint8)
-        img = img.copy()
+        try:
+            with Image.open(path) as im:
+                img = np.array(
+                    im.convert("RGB").resize((size, size), Image.Resampling.LANCZOS), dtype=np.uint8
+                )
+        except OSError as exc:  # PIL's UnidentifiedImageError is an OSError
+            raise ValueError(f"cannot read texture image {path} (from {name!r}): {exc}") from exc
     img.flags.writeable = False
     return img
 
@@ -236,7 +240,7 @@ def load_mesh(name: str) -> Mesh:
     :data:`~lerobot_factorworld.assets.mesh.MAX_FACES` faces are simplified.
     """
     if name.startswith("proc:"):
-        family, _ = _proc_family(name)
+        family = _proc_family(name)
         if family not in SHAPE_FAMILIES:
             raise ValueError(
                 f"{name!r} is a texture, not a shape; shape families: {', '.join(SHAPE_FAMILIES)}"

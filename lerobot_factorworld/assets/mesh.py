@@ -95,7 +95,8 @@ def decimate(vertices: Array, faces: Array, max_faces: int = MAX_FACES) -> tuple
         v, f = _clean(sums / counts, inverse[faces])
         if len(f) <= max_faces or res <= 4:
             return v, f
-        res = int(res * 0.8)
+        # face count scales with the square of the grid resolution: jump close to the target at once
+        res = max(4, min(int(res * 0.9), int(res * 0.95 * (max_faces / len(f)) ** 0.5)))
 
 
 def normalize_mesh(vertices: Array, faces: Array, max_faces: int = MAX_FACES) -> Mesh:

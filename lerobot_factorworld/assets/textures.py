@@ -93,17 +93,12 @@ def _band(phase: Array, duty: float, period: float, size: int) -> Array:
     return np.clip(d + 0.5, 0.0, 1.0)
 
 
-def _interp_matrix(freq: int, size: int) -> Array:
-    """(size, freq) matrix interpolating a periodic lattice of ``freq`` values smoothly at pixel centres."""
+def _interp_index(freq: int, size: int) -> tuple[Array, Array, Array]:
+    """Lattice neighbours (wrapped) and smoothstep weight for each pixel centre along one axis."""
     c = (np.arange(size) + 0.5) / size * freq
     i0 = np.floor(c).astype(np.int64)
     t = c - i0
-    t = t * t * (3 - 2 * t)
-    w = np.zeros((size, freq))
-    rows = np.arange(size)
-    np.add.at(w, (rows, i0 % freq), 1 - t)
-    np.add.at(w, (rows, (i0 + 1) % freq), t)
-    return w
+    return i0 % freq, (i0 + 1) % freq, t * t * (3 - 2 * t)
 
 
 class _Fbm:
@@ -116,11 +111,14 @@ class _Fbm:
         self.layers = [(rng.random((fy * 2**o, fx * 2**o)), gain**o) for o in range(octaves)]
 
     def grid(self, size: int) -> Array:
-        """Noise on the pixel grid in [0, 1]; interpolation is separable (two matrix products per octave)."""
-        total = sum(
-            _interp_matrix(lat.shape[0], size) @ lat @ _interp_matrix(lat.shape[1], size).T * amp
-            for lat, amp in self.layers
-        )
+        """Noise on the pixel grid in [0, 1]. Interpolation is separable (rows, then columns), which avoids
+        BLAS calls whose thread start-up made small textures slow and erratic on busy machines."""
+        total = np.zeros((size, size))
+        for lat, amp in self.layers:
+            y0, y1, ty = _interp_index(lat.shape[0], size)
+            x0, x1, tx = _interp_index(lat.shape[1], size)
+            rows = lat[y0] * (1 - ty)[:, None] + lat[y1] * ty[:, None]
+            total += (rows[:, x0] * (1 - tx) + rows[:, x1] * tx) * amp
         return _normalise(total)
 
 

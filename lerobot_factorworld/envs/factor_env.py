@@ -47,10 +47,11 @@ from ..tasks import get_task
 PER_EPISODE_FACTORS = ("object_pos", "arm_pos")  # applied at reset; everything else is compiled in
 RESERVED_OPTION_PREFIX = "lerobot_"  # LeRobot's rollout passes {"lerobot_new_rollout": True}
 OPTIONS = ("config", "env_index", "factors")
+CONTROL_FPS = 80  # Meta-World: timestep 0.0025 s x frame_skip 5 = 12.5 ms per env step
 
 
 class FactorWorldEnv(gym.Env):
-    metadata = {"render_modes": ["rgb_array"], "render_fps": 80}
+    metadata = {"render_modes": ["rgb_array"], "render_fps": CONTROL_FPS}
 
     def __init__(
         self,
