@@ -13,9 +13,9 @@ os.environ.setdefault("MUJOCO_GL", "egl")
 if os.environ["MUJOCO_GL"] == "egl":
     os.environ.setdefault("PYOPENGL_PLATFORM", "egl")
 
+from .envs.registration import register_envs  # noqa: E402
 from .factors.registry import FACTORS, support_matrix  # noqa: E402
 from .factors.values import FactorValues, SceneConfig, SceneObject, load_configs, save_configs  # noqa: E402
-from .envs.registration import register_envs  # noqa: E402
 from .tasks import TASKS, TaskSpec, get_task  # noqa: E402
 
 register_envs()

@@ -84,7 +84,7 @@ def _loose_object_only(task: TaskSpec) -> str | None:
 
 # Geometry of the distractor area, in the table frame (metres from the table centre).
 DISTRACTOR_AREA = _box((-0.45, 0.45), (-0.25, 0.25))
-DISTRACTOR_SIZE = (0.04, 0.09)
+DISTRACTOR_SIZE = (0.05, 0.12)
 MAX_DISTRACTORS = 5
 
 FACTORS: dict[str, FactorSpec] = {

@@ -40,12 +40,15 @@ def look_at_quat(pos: np.ndarray, target: np.ndarray) -> np.ndarray:
 CAMERAS: dict[str, CameraSpec] = {
     cam.name: cam
     for cam in (
-        # Facing the robot from the far side of the table, like Factor World's "movable" camera.
-        CameraSpec("front", pos=(-0.55, 1.55, 0.85), target=(0.0, 0.55, 0.0), fovy=45.0),
-        # From the robot's right shoulder, looking across the workspace.
-        CameraSpec("side", pos=(0.95, 0.05, 0.75), target=(0.0, 0.65, 0.0), fovy=45.0),
+        # Over the robot's right shoulder: sees every fixture's handle side, the gripper and the table.
+        CameraSpec("front", pos=(0.75, 0.2, 0.95), target=(-0.05, 0.7, 0.0), fovy=45.0),
+        # Low from the right of the table.
+        CameraSpec("side", pos=(1.05, 0.45, 0.55), target=(0.0, 0.7, 0.05), fovy=45.0),
         # Straight down on the workspace.
         CameraSpec("top", pos=(0.0, 0.5, 1.4), target=(0.0, 0.65, 0.0), fovy=45.0),
+        # From the far side of the table facing the robot, like the public Factor World "movable" camera
+        # (fixtures show their backs from here).
+        CameraSpec("far", pos=(-0.55, 1.55, 0.85), target=(0.0, 0.55, 0.0), fovy=45.0),
     )
 }
 """Factor World's scene cameras by name; ``front`` is the default observation camera."""
