@@ -24,6 +24,8 @@ class TaskSpec:
         max_episode_steps: Horizon used for evaluation and collection (Meta-World's own cap is 500).
         nominal_object_xy: The object's nominal start (x, y) when it is not the centre of Meta-World's
             random reset range: pick-place and basketball need the object at least 0.15 m from the goal.
+        reshapeable: Whether the object-shape factor applies: the task's scripted expert still solves
+            it with other object shapes (measured; basketball's and bin-picking's experts do not).
         limits: Per-factor boxes ``(factor, (low, high))`` where this task stays solvable by its
             scripted expert (bin walls, reach, the hoop's size); the factor's ranges are intersected
             with them and explicit values outside them are rejected.
@@ -35,6 +37,7 @@ class TaskSpec:
     object_is_free: bool = False
     max_episode_steps: int = 500
     nominal_object_xy: tuple[float, float] | None = None
+    reshapeable: bool = False
     limits: tuple[tuple[str, tuple[tuple[float, ...], tuple[float, ...]]], ...] = ()
 
     def limit(self, factor: str) -> tuple[tuple[float, ...], tuple[float, ...]] | None:
@@ -50,7 +53,10 @@ class TaskSpec:
 
 
 _ROWS = (
-    TaskSpec("pick-place", "pick up the puck and place it at the blue goal", ("obj",), True, nominal_object_xy=(0.0, 0.6)),
+    TaskSpec(
+        "pick-place", "pick up the puck and place it at the blue goal", ("obj",), True,
+        nominal_object_xy=(0.0, 0.6), reshapeable=True,
+    ),
     TaskSpec(
         "basketball", "dunk the basketball into the hoop", ("bsktball",), True, nominal_object_xy=(0.0, 0.6),
         limits=(("object_size", ((0.7,), (1.1,))),),

@@ -8,6 +8,7 @@ Description:
 Observation space:
     ``pixels``: dict camera -> uint8 (H, W, 3); ``agent_pos``: float32 (8,) = gripper position and
     finger opening at the current and at the previous step (the paper's proprioception).
+    ``cameras=()`` gives a physics-only env without ``pixels`` (scripted experts, physics tests).
 
 Action space:
     Box(-1, 1, (4,)): end-effector displacement (x, y, z, 1 cm per unit) and gripper effort.
@@ -69,7 +70,9 @@ class FactorWorldEnv(gym.Env):
     ) -> None:
         self.task_spec = get_task(task)
         self.configs = _as_configs(self.task_spec.name, configs)
-        self.cameras = check_camera_names([cameras] if isinstance(cameras, str) else list(cameras))
+        self.cameras = check_camera_names([cameras] if isinstance(cameras, str) else list(cameras), allow_none=True)
+        if not self.cameras:
+            render_mode = None
         self.image_size = (image_size, image_size) if isinstance(image_size, int) else tuple(image_size)
         if min(self.image_size) < 8:
             raise ValueError(f"image_size must be at least 8 pixels, got {image_size!r}")
@@ -86,14 +89,12 @@ class FactorWorldEnv(gym.Env):
         self.task_description = self.configs[0].task_description
 
         h, w = self.image_size
-        self.observation_space = gym.spaces.Dict(
-            {
-                "pixels": gym.spaces.Dict(
-                    {cam: gym.spaces.Box(0, 255, (h, w, 3), dtype=np.uint8) for cam in self.cameras}
-                ),
-                "agent_pos": gym.spaces.Box(-np.inf, np.inf, (8,), dtype=np.float32),
-            }
-        )
+        spaces: dict[str, gym.Space] = {"agent_pos": gym.spaces.Box(-np.inf, np.inf, (8,), dtype=np.float32)}
+        if self.cameras:
+            spaces["pixels"] = gym.spaces.Dict(
+                {cam: gym.spaces.Box(0, 255, (h, w, 3), dtype=np.uint8) for cam in self.cameras}
+            )
+        self.observation_space = gym.spaces.Dict(spaces)
         self.action_space = gym.spaces.Box(-1.0, 1.0, (4,), dtype=np.float32)
 
         self._scenes: OrderedDict[FactorValues, _Scene] = OrderedDict()
@@ -220,10 +221,11 @@ class FactorWorldEnv(gym.Env):
 
     def _observe(self, mw_obs: np.ndarray) -> dict[str, Any]:
         assert self._scene is not None
-        pixels = self._scene.render_all()
-        self._last_frame = pixels[self.cameras[0]]
-        agent_pos = np.concatenate([mw_obs[0:4], mw_obs[18:22]]).astype(np.float32)
-        return {"pixels": pixels, "agent_pos": agent_pos}
+        obs: dict[str, Any] = {"agent_pos": np.concatenate([mw_obs[0:4], mw_obs[18:22]]).astype(np.float32)}
+        if self.cameras:
+            obs["pixels"] = self._scene.render_all()
+            self._last_frame = obs["pixels"][self.cameras[0]]
+        return obs
 
     def _info(self, success: bool, metaworld_reward: float) -> dict[str, Any]:
         assert self._config is not None

@@ -82,8 +82,18 @@ def _loose_object_only(task: TaskSpec) -> str | None:
     )
 
 
+def _reshapeable_only(task: TaskSpec) -> str | None:
+    reason = _loose_object_only(task)
+    if reason or task.reshapeable:
+        return reason
+    return (
+        f"{task.name}'s scripted expert is tuned to its own object's shape and fails (<90%) with other "
+        "shapes, so demonstrations could not be collected"
+    )
+
+
 # Geometry of the distractor area, in the table frame (metres from the table centre).
-DISTRACTOR_AREA = _box((-0.45, 0.45), (-0.25, 0.25))
+DISTRACTOR_AREA = _box((-0.6, 0.6), (-0.33, 0.33))
 DISTRACTOR_SIZE = (0.05, 0.12)
 MAX_DISTRACTORS = 5
 
@@ -133,7 +143,7 @@ FACTORS: dict[str, FactorSpec] = {
         FactorSpec(
             "object_shape", "Object shape",
             "Mesh replacing the manipulated object's geometry (same footprint, mass and grasp height).",
-            "asset", visual=False, asset_kind="shape", applies=_loose_object_only,
+            "asset", visual=False, asset_kind="shape", applies=_reshapeable_only,
         ),
         FactorSpec(
             "object_texture", "Object texture", "Texture image or flat RGB colour of the object.",

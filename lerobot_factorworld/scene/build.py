@@ -41,6 +41,7 @@ class ObjectGeometry:
     """Facts about a task's manipulated object in its default scene (for size and shape edits)."""
 
     extent: float  # largest bounding-box side of the object's collision geometry, metres
+    dims: tuple[float, float, float]  # its bounding-box sides along x, y, z
     bottom: float  # lowest point of that geometry relative to the root body origin (z, metres)
     mass: float  # total mass of the object's subtree, kg
 
@@ -73,7 +74,8 @@ def object_geometry(task_name: str) -> ObjectGeometry:
         highs.append(corners.max(axis=0))
     low, high = np.min(lows, axis=0), np.max(highs, axis=0)
     mass = float(model.body_subtreemass[root])
-    return ObjectGeometry(extent=float((high - low).max()), bottom=float(low[2] - data.xpos[root][2]), mass=mass)
+    dims = tuple(float(d) for d in high - low)
+    return ObjectGeometry(float(max(dims)), dims, float(low[2] - data.xpos[root][2]), mass)
 
 
 def build_model(
@@ -216,28 +218,38 @@ def _reshape_object(spec: mujoco.MjSpec, task: TaskSpec, shape: str | None, scal
     keep_mass = not root.explicitinertial
     for geom in geoms:
         if geom is not main:
-            spec.delete(geom)
-    size = geometry.extent * scale
+            geom.delete()
+    # Fit the new shape to the old object's bounding box, so the grasp height and width (and what the
+    # scripted expert assumes about them) stay the same: shape varies, size does not.
+    fit = np.asarray(geometry.dims) * scale / np.maximum(np.ptp(mesh.vertices, axis=0), 1e-6)
     spec.add_mesh(
         name="fw_object_mesh",
-        uservert=(mesh.vertices * size).astype(np.float64).flatten().tolist(),
+        uservert=(mesh.vertices * fit).astype(np.float64).flatten().tolist(),
         userface=mesh.faces.flatten().tolist(),
     )
-    # Re-home the main geom on the root body so its frame is the object's frame.
-    if main.parent.name != root.name:
-        new = root.add_geom(name=main.name)
-        for attr in ("contype", "conaffinity", "condim", "friction", "solref", "solimp", "priority", "margin", "gap"):
-            setattr(new, attr, getattr(main, attr))
-        spec.delete(main)
-        main = new
+    # Keep the main geom in its own body (Meta-World reads it by name); express the new pose in the
+    # root body's frame by removing the offsets of the bodies between them.
+    offset = np.zeros(3)
+    body = main.parent
+    while body.name != root.name:
+        offset += np.asarray(body.pos)
+        body = body.parent
     main.type = mujoco.mjtGeom.mjGEOM_MESH
     main.meshname = "fw_object_mesh"
-    main.pos = [0.0, 0.0, geometry.bottom * scale]
+    main.pos = (np.array([0.0, 0.0, geometry.bottom * scale]) - offset).tolist()
     main.quat = [1.0, 0.0, 0.0, 0.0]
-    main.group = 0
-    main.rgba = [0.8, 0.3, 0.2, 1.0]
     if keep_mass:
         main.mass = geometry.mass
+    if main.group not in VISIBLE_GROUPS:
+        # A hidden collision geom (its group may be the only one counted for inertia): add a massless
+        # visible twin rather than moving it to a rendered group.
+        twin = main.parent.add_geom(
+            name="fw_object_visual", type=mujoco.mjtGeom.mjGEOM_MESH, meshname="fw_object_mesh",
+            pos=main.pos, contype=0, conaffinity=0, group=1, mass=0.0,
+        )
+        twin.rgba = [0.8, 0.3, 0.2, 1.0]
+    else:
+        main.rgba = [0.8, 0.3, 0.2, 1.0]
 
 
 def _scale_subtree(spec: mujoco.MjSpec, roots: tuple[str, ...], scale: float) -> None:

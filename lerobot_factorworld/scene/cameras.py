@@ -56,9 +56,9 @@ CAMERAS: dict[str, CameraSpec] = {
 DEFAULT_CAMERAS = ("front",)
 
 
-def check_camera_names(names: tuple[str, ...] | list[str]) -> tuple[str, ...]:
+def check_camera_names(names: tuple[str, ...] | list[str], allow_none: bool = False) -> tuple[str, ...]:
     names = tuple(names)
     unknown = [n for n in names if n not in CAMERAS]
-    if unknown or not names:
-        raise ValueError(f"unknown camera(s) {unknown or names!r}; valid cameras: {', '.join(CAMERAS)}")
+    if unknown or (not names and not allow_none) or len(set(names)) != len(names):
+        raise ValueError(f"bad camera list {names!r}; valid cameras: {', '.join(CAMERAS)} (each at most once)")
     return names

@@ -1,55 +1,92 @@
-"""Where distractors may stand: the table minus every task fixture, the object's start region and goal.
+"""Where distractors may stand: the table minus everything the task's expert sweeps through.
 
-Computed once per task from its default compiled scene (no rendering), in the table frame.
+A distractor must not block the task, so the keep-out area is measured, not guessed: the scripted
+expert is run (physics only, no noise) from the extreme object offsets the task allows, and every
+step records the footprint of each non-robot body (objects, doors, drawers, windows as they move)
+and of the gripper whenever it is low enough to hit a distractor. One box per (start, body) is kept.
+Computed once per task and process, in the table frame.
 """
 
 from __future__ import annotations
 
-from functools import cache
+import itertools
+from functools import lru_cache
 
 import mujoco
 import numpy as np
 
-from ..factors.registry import get_factor
+from ..factors.registry import DISTRACTOR_SIZE, factor_range, get_factor
 from ..tasks import get_task
-from .build import FLOOR_GEOM, ROBOT_ROOT, TABLE_CENTER, load_task_spec, object_geometry
+from .build import FLOOR_GEOM, ROBOT_ROOT, TABLE_CENTER
 
 SCENERY_BODIES = ("tablelink", "RetainingWall", "mocap")  # static scenery distractors may touch
-CLEARANCE = 0.03  # metres kept free around fixtures, the object's start region and the goal
+GRIPPER_BODIES = ("hand", "rightclaw", "leftclaw", "rightpad", "leftpad")
+CLEARANCE = 0.03  # metres kept free around everything the expert sweeps
+LOW_MARGIN = 0.05  # the gripper counts as "low" below the tallest distractor plus this
+SWEEP_STEPS = 300
 
 
-@cache
+@lru_cache(maxsize=None)
 def keepout_boxes(task_name: str) -> np.ndarray:
     """(k, 4) boxes [xmin, ymin, xmax, ymax] in the table frame that distractors must not overlap."""
-    task = get_task(task_name)
-    model = load_task_spec(task).compile()
-    data = mujoco.MjData(model)
-    mujoco.mj_forward(model, data)
-    robot = model.body(ROBOT_ROOT).id
-    scenery = {model.body(name).id for name in SCENERY_BODIES if _has_body(model, name)}
-    boxes = []
-    for g in range(model.ngeom):
-        root = _root_body(model, int(model.geom_bodyid[g]))
-        if root == robot or root in scenery or root == 0 or model.geom(g).name == FLOOR_GEOM:
-            continue
-        boxes.append(_xy_box(model, data, g))
-    # The object's start region under the widest object-position range, plus its size.
-    low, high = get_factor("object_pos").widest
-    from ..envs.metaworld_bridge import nominal_object_xy
+    from ..envs.factor_env import FactorWorldEnv
+    from ..experts import expert_action, expert_policy
+    from ..factors.values import FactorValues, SceneConfig
 
-    centre = np.asarray(nominal_object_xy(task))
-    half = object_geometry(task.name).extent / 2
-    boxes.append([centre[0] + low[0] - half, centre[1] + low[1] - half, centre[0] + high[0] + half, centre[1] + high[1] + half])
-    for s in range(model.nsite):
-        if model.site(s).name == "goal":
-            x, y = data.site_xpos[s][:2]
-            boxes.append([x - 0.04, y - 0.04, x + 0.04, y + 0.04])
+    task = get_task(task_name)
+    widest = list(get_factor("object_pos").ranges)[-1]
+    low, high = factor_range(task, "object_pos", widest)
+    starts = [(0.0, 0.0), *itertools.product((low[0], high[0]), (low[1], high[1]))]
+    env = FactorWorldEnv(task.name, [SceneConfig(task.name, FactorValues(object_pos=s)) for s in starts], cameras=())
+    policy = expert_policy(task)
+    boxes: list[np.ndarray] = []
+    try:
+        for index in range(len(starts)):
+            env.reset(seed=0, options={"env_index": index})
+            tracked = _tracked_geoms(env.model)
+            sweep = {body: np.array([np.inf, np.inf, -np.inf, -np.inf]) for body in tracked}
+            for _ in range(SWEEP_STEPS):
+                _record(env.model, env.data, tracked, sweep)
+                _, _, terminated, _, _ = env.step(expert_action(policy, env.state_observation))
+                if terminated:
+                    break
+            _record(env.model, env.data, tracked, sweep)
+            boxes.extend(box for box in sweep.values() if np.isfinite(box).all())
+    finally:
+        env.close()
     out = np.asarray(boxes, dtype=np.float64)
     out[:, [0, 2]] -= TABLE_CENTER[0]
     out[:, [1, 3]] -= TABLE_CENTER[1]
     out[:, :2] -= CLEARANCE
     out[:, 2:] += CLEARANCE
     return out
+
+
+def _tracked_geoms(model: mujoco.MjModel) -> dict[int, tuple[list[int], bool]]:
+    """root body -> (its geoms, is_gripper) for every moving or task body that is not scenery."""
+    robot = model.body(ROBOT_ROOT).id
+    scenery = {model.body(name).id for name in SCENERY_BODIES if _has_body(model, name)}
+    gripper = {model.body(name).id for name in GRIPPER_BODIES if _has_body(model, name)}
+    tracked: dict[int, tuple[list[int], bool]] = {}
+    for g in range(model.ngeom):
+        body = int(model.geom_bodyid[g])
+        root = _root_body(model, body)
+        if body in gripper:
+            tracked.setdefault(-body, ([], True))[0].append(g)
+        elif root not in (0, robot) and root not in scenery and model.geom(g).name != FLOOR_GEOM:
+            tracked.setdefault(root, ([], False))[0].append(g)
+    return tracked
+
+
+def _record(model, data, tracked, sweep) -> None:
+    low_z = DISTRACTOR_SIZE[1] + LOW_MARGIN
+    for key, (geoms, is_gripper) in tracked.items():
+        corners = np.concatenate([_geom_world_corners(model, data, g) for g in geoms])
+        if is_gripper and corners[:, 2].min() > low_z:
+            continue
+        box = sweep[key]
+        box[:2] = np.minimum(box[:2], corners[:, :2].min(axis=0))
+        box[2:] = np.maximum(box[2:], corners[:, :2].max(axis=0))
 
 
 def _has_body(model: mujoco.MjModel, name: str) -> bool:
@@ -62,8 +99,7 @@ def _root_body(model: mujoco.MjModel, b: int) -> int:
     return b
 
 
-def _xy_box(model: mujoco.MjModel, data: mujoco.MjData, g: int) -> list[float]:
-    from .build import _geom_world_corners
+def _geom_world_corners(model, data, g: int) -> np.ndarray:
+    from .build import _geom_world_corners as corners
 
-    corners = _geom_world_corners(model, data, g)
-    return [*corners[:, :2].min(axis=0), *corners[:, :2].max(axis=0)]
+    return corners(model, data, g)
