@@ -54,6 +54,12 @@ def cmd_factors(_: list[str]) -> None:
         print(f"| {spec.name} | {spec.title} | {spec.kind} | {'yes' if spec.visual else 'no'} | {ranges} |")
     print("\nSupport matrix (— = the factor cannot apply to the task; requesting it raises an error):\n")
     print(support_matrix_markdown())
+    print("\nPer-task limits (where the task's scripted expert stays >= 90% successful; ranges are clipped to them):\n")
+    from .tasks import TASKS
+
+    for task in TASKS.values():
+        for name, (low, high) in task.limits:
+            print(f"- {task.name}: {name} in {list(low)} .. {list(high)}")
 
 
 def cmd_cameras(_: list[str]) -> None:

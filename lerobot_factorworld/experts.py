@@ -18,7 +18,9 @@ def expert_policy(task: str | TaskSpec) -> Any:
     return getattr(policies, name)()
 
 
-def expert_action(policy: Any, state: np.ndarray, rng: np.random.Generator | None = None, noise_std: float = 0.0) -> np.ndarray:
+def expert_action(
+    policy: Any, state: np.ndarray, rng: np.random.Generator | None = None, noise_std: float = 0.0
+) -> np.ndarray:
     """One expert action, optionally with Gaussian noise (the public Factor World used std 0.002)."""
     action = np.asarray(policy.get_action(state), dtype=np.float32)
     if noise_std > 0:

@@ -15,6 +15,12 @@ What is measured
     order alternating (A B, B A, A B, ...) because this machine is noisy; the reported figure per mode is
     the median of the per-round rates.
 
+    Each mode runs in its own persistent worker process (it idles, blocked on a pipe, while the other one is
+    timed). That is how each would be used, and it matters: gymnasium's ``OffScreenViewer`` makes its EGL
+    context current only when it is created, so in a process that also renders with ``mujoco.Renderer``
+    (Factor World) Meta-World's ``env.render()`` would draw through the wrong GL context and return black
+    frames about 5x faster than it really renders. Each worker checks that its last frame is not blank.
+
 Why
     Physics is cheap: on a CPU-only machine (MuJoCo through EGL on Mesa's llvmpipe) rendering dominates the
     cost of a step. Meta-World renders with a 4096x4096 shadow map, 4x multisampling and reflective
@@ -32,11 +38,15 @@ from __future__ import annotations
 import os
 
 os.environ.setdefault("MUJOCO_GL", "egl")  # before anything imports mujoco (Meta-World's side included)
+if os.environ["MUJOCO_GL"] == "egl":
+    os.environ.setdefault("PYOPENGL_PLATFORM", "egl")  # as lerobot_factorworld does; inherited by the workers
 
 import argparse  # noqa: E402
+import multiprocessing as mp  # noqa: E402
 import statistics  # noqa: E402
 import sys  # noqa: E402
 import time  # noqa: E402
+import traceback  # noqa: E402
 import warnings  # noqa: E402
 from collections.abc import Callable  # noqa: E402
 from dataclasses import dataclass  # noqa: E402
@@ -51,6 +61,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 TARGET_RATIO = 8.0
 IMAGE_SIZE = 84
 WARMUP_STEPS = 5
+PROGRESS_EVERY = 10  # steps between progress messages from a worker
 FACTOR_WORLD = "factorworld"
 META_WORLD = "metaworld"
 MODES = (FACTOR_WORLD, META_WORLD)
@@ -145,8 +156,98 @@ def render_settings(runner: Runner) -> str:
     model = env.model if runner.mode == FACTOR_WORLD else env.unwrapped.model
     quality = model.vis.quality
     frame = runner.last_frame
-    assert frame is not None
-    return f"shadowsize={quality.shadowsize} offsamples={quality.offsamples} frame={tuple(frame.shape)}"
+    if frame is None or int(frame.max()) == int(frame.min()):
+        raise RuntimeError(f"{runner.mode}: rendered frame is blank; the benchmark would not be measuring rendering")
+    return (
+        f"shadowsize={quality.shadowsize} offsamples={quality.offsamples} "
+        f"frame={tuple(frame.shape)} mean_px={float(frame.mean()):.1f}"
+    )
+
+
+def _worker(conn, mode: str, tasks: list[str], seed: int, actions: dict[str, np.ndarray]) -> None:
+    """One mode in its own process: build and warm up its envs, then run timed segments on request.
+
+    Protocol (worker -> parent): ("ready", settings), then per ("run", lo, hi) request any number of
+    ("progress", n) and one ("done", seconds); ("closed",) after ("close",); ("error", text) on failure.
+    """
+    try:
+        warnings.filterwarnings("ignore", module=r"gymnasium\..*")  # env-checker chatter about Meta-World's spaces
+        maker = make_factorworld if mode == FACTOR_WORLD else make_metaworld
+        runners = [maker(task, seed) for task in tasks]
+        # Warm-up (not timed): the first reset compiles the scene and uploads it to the GL context, the
+        # first renders allocate the framebuffers / shadow map.
+        for runner in runners:
+            runner.reset()
+            runner.run(actions[runner.task][:WARMUP_STEPS])
+        conn.send(("ready", [render_settings(runner) for runner in runners][0]))
+
+        pending = 0
+
+        def on_step() -> None:
+            nonlocal pending
+            pending += 1
+            if pending >= PROGRESS_EVERY:
+                conn.send(("progress", pending))
+                pending = 0
+
+        while True:
+            msg = conn.recv()
+            if msg[0] == "run":
+                _, lo, hi = msg
+                seconds = sum(runner.run(actions[runner.task][lo:hi], on_step=on_step) for runner in runners)
+                for runner in runners:
+                    render_settings(runner)  # raises if the last frame came out blank
+                if pending:
+                    conn.send(("progress", pending))
+                    pending = 0
+                conn.send(("done", seconds))
+            elif msg[0] == "close":
+                for runner in runners:
+                    runner.env.close()
+                conn.send(("closed",))
+                return
+    except BaseException:
+        conn.send(("error", traceback.format_exc()))
+
+
+class Worker:
+    """Parent-side handle on a :func:`_worker` process."""
+
+    def __init__(self, ctx, mode: str, tasks: list[str], seed: int, actions: dict[str, np.ndarray]) -> None:
+        self.mode = mode
+        self.conn, child = ctx.Pipe()
+        self.process = ctx.Process(target=_worker, args=(child, mode, tasks, seed, actions), daemon=True)
+        self.process.start()
+        child.close()
+
+    def recv(self) -> tuple:
+        msg = self.conn.recv()
+        if msg[0] == "error":
+            raise RuntimeError(f"{self.mode} worker failed:\n{msg[1]}")
+        return msg
+
+    def run(self, lo: int, hi: int, bar: tqdm) -> float:
+        self.conn.send(("run", lo, hi))
+        while True:
+            msg = self.recv()
+            if msg[0] == "progress":
+                bar.update(msg[1])
+            elif msg[0] == "done":
+                return msg[1]
+
+    def close(self) -> None:
+        try:
+            if self.process.is_alive():
+                self.conn.send(("close",))
+                self.conn.recv()
+        except (EOFError, OSError):
+            pass  # the worker already failed or exited; its error (if any) was raised by recv()
+        finally:
+            self.process.join(timeout=30)
+            if self.process.is_alive():
+                self.process.terminate()
+                self.process.join(timeout=5)
+            self.conn.close()
 
 
 def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
@@ -161,44 +262,46 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
         args.steps, args.rounds = 30, 1
     if args.steps < 1 or args.rounds < 1:
         parser.error("--steps and --rounds must be at least 1")
+    from lerobot_factorworld.tasks import TASKS
+
+    unknown = [task for task in args.task if task not in TASKS]
+    if unknown:
+        parser.error(f"unknown task(s) {', '.join(unknown)}; valid: {', '.join(TASKS)}")
     return args
 
 
 def main(argv: list[str] | None = None) -> int:
     args = parse_args(argv)
-    warnings.filterwarnings("ignore", module=r"gymnasium\..*")  # env-checker chatter about Meta-World's spaces
     tasks: list[str] = list(args.task)
 
-    # Same random actions for both modes: one stream per task, one slice per round.
+    # Same random actions for both modes: one stream per task, warm-up first, then one slice per round.
     rng = np.random.default_rng(args.seed)
     actions = {
         task: rng.uniform(-1.0, 1.0, size=(WARMUP_STEPS + args.rounds * args.steps, 4)).astype(np.float32)
         for task in tasks
     }
 
-    print(f"building envs for {', '.join(tasks)} at {IMAGE_SIZE}x{IMAGE_SIZE} (MUJOCO_GL={os.environ['MUJOCO_GL']})")
-    makers = {FACTOR_WORLD: make_factorworld, META_WORLD: make_metaworld}
-    runners: dict[str, list[Runner]] = {mode: [makers[mode](task, args.seed) for task in tasks] for mode in MODES}
+    print(
+        f"building envs for {', '.join(tasks)} at {IMAGE_SIZE}x{IMAGE_SIZE} (MUJOCO_GL={os.environ['MUJOCO_GL']})",
+        flush=True,
+    )
+    ctx = mp.get_context("spawn")  # fresh interpreters: no GL state inherited through fork
+    workers = {mode: Worker(ctx, mode, tasks, args.seed, actions) for mode in MODES}
+    try:
+        settings = {mode: workers[mode].recv()[1] for mode in MODES}
 
-    # Warm-up (not timed): first reset compiles/uploads the scene to the GL context, first steps fill caches.
-    for mode in MODES:
-        for runner in runners[mode]:
-            runner.reset()
-            runner.run(actions[runner.task][:WARMUP_STEPS])
-
-    rates: dict[str, list[float]] = {mode: [] for mode in MODES}
-    total = args.rounds * len(MODES) * len(tasks) * args.steps
-    with tqdm(total=total, desc="rendered steps", unit="step", file=sys.stderr) as bar:
-        for r in range(args.rounds):
-            order = MODES if r % 2 == 0 else MODES[::-1]
-            lo = WARMUP_STEPS + r * args.steps
-            for mode in order:
-                bar.set_postfix_str(f"round {r + 1}/{args.rounds} {mode}")
-                seconds = sum(
-                    runner.run(actions[runner.task][lo : lo + args.steps], on_step=bar.update)
-                    for runner in runners[mode]
-                )
-                rates[mode].append(len(tasks) * args.steps / seconds)
+        rates: dict[str, list[float]] = {mode: [] for mode in MODES}
+        total = args.rounds * len(MODES) * len(tasks) * args.steps
+        with tqdm(total=total, desc="rendered steps", unit="step", file=sys.stderr) as bar:
+            for r in range(args.rounds):
+                lo = WARMUP_STEPS + r * args.steps
+                for mode in MODES if r % 2 == 0 else MODES[::-1]:
+                    bar.set_postfix_str(f"round {r + 1}/{args.rounds} {mode}")
+                    seconds = workers[mode].run(lo, lo + args.steps, bar)
+                    rates[mode].append(len(tasks) * args.steps / seconds)
+    finally:
+        for worker in workers.values():
+            worker.close()
 
     medians = {mode: statistics.median(rates[mode]) for mode in MODES}
     ratio = medians[FACTOR_WORLD] / medians[META_WORLD]
@@ -206,7 +309,7 @@ def main(argv: list[str] | None = None) -> int:
     print()
     print(f"tasks: {', '.join(tasks)} | {args.steps} steps x {args.rounds} rounds per mode | seed {args.seed}")
     for mode in MODES:
-        print(f"  {MODE_LABELS[mode]:<32} {render_settings(runners[mode][0])}")
+        print(f"  {MODE_LABELS[mode]:<32} {settings[mode]}")
     print()
     round_cols = [f"r{i + 1} steps/s" for i in range(args.rounds)]
     header = f"{'mode':<32}" + "".join(f"{c:>14}" for c in round_cols) + f"{'median':>12}{'ms/step':>10}"
@@ -218,10 +321,6 @@ def main(argv: list[str] | None = None) -> int:
     print("-" * len(header))
     verdict = "meets" if ratio >= TARGET_RATIO else "BELOW"
     print(f"Factor World / Meta-World: {ratio:.2f}x ({verdict} the >= {TARGET_RATIO:g}x target)")
-
-    for mode in MODES:
-        for runner in runners[mode]:
-            runner.env.close()
     print(f"ratio: {ratio:.4f}")
     return 0
 

@@ -31,9 +31,7 @@ def main() -> int:
     doc = json.loads(text)
     for kind in KINDS:
         counts = doc["counts"][kind]
-        print(
-            f"{kind:8s} " + "  ".join(f"{s}={counts[s]}" for s in SPLITS) + f"  total={sum(counts.values())}"
-        )
+        print(f"{kind:8s} " + "  ".join(f"{s}={counts[s]}" for s in SPLITS) + f"  total={sum(counts.values())}")
     current = SPLITS_FILE.read_text(encoding="utf-8") if SPLITS_FILE.exists() else None
     if args.check:
         if current != text:

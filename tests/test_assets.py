@@ -185,9 +185,7 @@ def test_all_builtin_meshes_compile_in_one_mujoco_spec() -> None:
     spec = mujoco.MjSpec()
     for k, name in enumerate(names):
         m = A.load_mesh(name)
-        spec.add_mesh(
-            name=f"mesh{k}", uservert=m.vertices.ravel().tolist(), userface=m.faces.ravel().tolist()
-        )
+        spec.add_mesh(name=f"mesh{k}", uservert=m.vertices.ravel().tolist(), userface=m.faces.ravel().tolist())
         body = spec.worldbody.add_body(name=f"body{k}", pos=[k % 16, k // 16, 0.0])
         body.add_freejoint()  # free bodies exercise MuJoCo's mass/inertia computation from the mesh
         body.add_geom(type=mujoco.mjtGeom.mjGEOM_MESH, meshname=f"mesh{k}")
@@ -210,9 +208,7 @@ def _write_user_folder(root: Path) -> None:
     (root / ".hidden.png").write_bytes(b"not an image")
     cube_v = [(x, y, z) for x in (0, 2) for y in (0, 1) for z in (0, 3)]
     quads = [(1, 2, 4, 3), (5, 7, 8, 6), (1, 5, 6, 2), (3, 4, 8, 7), (1, 3, 7, 5), (2, 6, 8, 4)]  # outward
-    obj = "\n".join(
-        [f"v {x} {y} {z}" for x, y, z in cube_v] + [f"f {a}/1 {b}/1 {c}/1 {d}/1" for a, b, c, d in quads]
-    )
+    obj = "\n".join([f"v {x} {y} {z}" for x, y, z in cube_v] + [f"f {a}/1 {b}/1 {c}/1 {d}/1" for a, b, c, d in quads])
     (root / "cube.obj").write_text(obj + "\n")
     tetra = [(0, 0, 0), (1, 0, 0), (0, 1, 0), (0, 0, 1)]
     tris = [(0, 2, 1), (0, 1, 3), (0, 3, 2), (1, 2, 3)]
@@ -248,9 +244,7 @@ def test_user_folder_split_and_loading(tmp_path: Path) -> None:
         spec.add_mesh(name=f"m{k}", uservert=m.vertices.ravel().tolist(), userface=m.faces.ravel().tolist())
         spec.worldbody.add_geom(type=mujoco.mjtGeom.mjGEOM_MESH, meshname=f"m{k}")
     spec.compile()
-    np.testing.assert_allclose(
-        A.load_mesh(f"file:{folder / 'cube.obj'}").extents, [2 / 3, 1 / 3, 1.0], atol=1e-6
-    )
+    np.testing.assert_allclose(A.load_mesh(f"file:{folder / 'cube.obj'}").extents, [2 / 3, 1 / 3, 1.0], atol=1e-6)
     # the split depends on relative paths only: a copy elsewhere splits the same way
     copy = tmp_path / "elsewhere" / "copy"
     shutil.copytree(folder, copy)

@@ -110,9 +110,7 @@ METAWORLD_MESHES: tuple[str, ...] = tuple(
 """Small, object-like Meta-World meshes (< 2000 faces); fixtures such as the table or robot are left out."""
 
 _PROC_RE = re.compile(r"^proc:([a-z_]+)-(\d{3})$")
-_NAME_HELP = (
-    "expected 'proc:<family>-<NNN>', 'metaworld:<path inside metaworld/assets>' or 'file:<absolute path>'"
-)
+_NAME_HELP = "expected 'proc:<family>-<NNN>', 'metaworld:<path inside metaworld/assets>' or 'file:<absolute path>'"
 
 
 # ----------------------------------------------------------------------------------------------------------
@@ -164,9 +162,7 @@ def asset_kind(name: str) -> AssetKind:
 def _proc_family(name: str) -> str:
     m = _PROC_RE.match(name)
     if m is None:
-        raise ValueError(
-            f"bad procedural asset name {name!r}; expected 'proc:<family>-<NNN>' (e.g. proc:checker-007)"
-        )
+        raise ValueError(f"bad procedural asset name {name!r}; expected 'proc:<family>-<NNN>' (e.g. proc:checker-007)")
     family = m.group(1)
     if family not in TEXTURE_FAMILIES and family not in SHAPE_FAMILIES:
         raise ValueError(
@@ -191,9 +187,7 @@ def _file_path(name: str, kind: AssetKind) -> Path:
     else:
         raise ValueError(f"unknown asset name {name!r}; {_NAME_HELP}")
     if path.suffix.lower() not in _extensions(kind):
-        raise ValueError(
-            f"{name!r} is not a {kind} file; supported extensions: {', '.join(_extensions(kind))}"
-        )
+        raise ValueError(f"{name!r} is not a {kind} file; supported extensions: {', '.join(_extensions(kind))}")
     if not path.is_file():
         raise FileNotFoundError(f"asset file not found: {path} (from {name!r})")
     return path
@@ -208,17 +202,13 @@ def _texture_cached(name: str, size: int) -> np.ndarray:
     if name.startswith("proc:"):
         family = _proc_family(name)
         if family not in TEXTURE_FAMILIES:
-            raise ValueError(
-                f"{name!r} is a shape, not a texture; texture families: {', '.join(TEXTURE_FAMILIES)}"
-            )
+            raise ValueError(f"{name!r} is a shape, not a texture; texture families: {', '.join(TEXTURE_FAMILIES)}")
         img = generate_texture(family, stable_seed(name), size)
     else:
         path = _file_path(name, "texture")
         try:
             with Image.open(path) as im:
-                img = np.array(
-                    im.convert("RGB").resize((size, size), Image.Resampling.LANCZOS), dtype=np.uint8
-                )
+                img = np.array(im.convert("RGB").resize((size, size), Image.Resampling.LANCZOS), dtype=np.uint8)
         except OSError as exc:  # PIL's UnidentifiedImageError is an OSError
             raise ValueError(f"cannot read texture image {path} (from {name!r}): {exc}") from exc
     img.flags.writeable = False
@@ -242,9 +232,7 @@ def load_mesh(name: str) -> Mesh:
     if name.startswith("proc:"):
         family = _proc_family(name)
         if family not in SHAPE_FAMILIES:
-            raise ValueError(
-                f"{name!r} is a texture, not a shape; shape families: {', '.join(SHAPE_FAMILIES)}"
-            )
+            raise ValueError(f"{name!r} is a texture, not a shape; shape families: {', '.join(SHAPE_FAMILIES)}")
         return generate_shape(family, stable_seed(name))
     path = _file_path(name, "shape")
     try:
@@ -288,9 +276,7 @@ def split_pool(
     n = len(names)
     if n < 2:
         raise ValueError(f"need at least 2 {kind} assets to make a train/eval split, got {n}")
-    order = sorted(
-        range(n), key=lambda i: (hashlib.sha256(f"{seed}\x1f{keys[i]}".encode()).digest(), keys[i])
-    )
+    order = sorted(range(n), key=lambda i: (hashlib.sha256(f"{seed}\x1f{keys[i]}".encode()).digest(), keys[i]))
     n_train = min(max(round(n * TRAIN_FRACTION[kind]), 1), n - 1)
     return {
         "train": tuple(sorted(names[i] for i in order[:n_train])),
@@ -367,9 +353,7 @@ def folder_names(kind: AssetKind, folder: str | Path) -> tuple[str, ...]:
     return tuple(name for _, name in _folder_files(_check_kind(kind), folder))
 
 
-def split_names(
-    kind: AssetKind, split: Split, folder: str | Path | None = None, seed: int = 0
-) -> tuple[str, ...]:
+def split_names(kind: AssetKind, split: Split, folder: str | Path | None = None, seed: int = 0) -> tuple[str, ...]:
     """Asset names of one split, sorted.
 
     Without ``folder`` the built-in split is read from ``asset_splits.json`` (for ``seed == 0``; another

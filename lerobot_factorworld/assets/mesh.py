@@ -166,9 +166,7 @@ def convex_hull(points: Array) -> Array:
         visible = np.einsum("ij,ij->i", nrm, p[k] - a) > eps
         if not visible.any():
             continue
-        vis_edges = {
-            (int(e0), int(e1)) for t in tri[visible] for e0, e1 in ((t[0], t[1]), (t[1], t[2]), (t[2], t[0]))
-        }
+        vis_edges = {(int(e0), int(e1)) for t in tri[visible] for e0, e1 in ((t[0], t[1]), (t[1], t[2]), (t[2], t[0]))}
         horizon = [(e0, e1) for e0, e1 in vis_edges if (e1, e0) not in vis_edges]
         faces = [tuple(int(i) for i in t) for t in tri[~visible]]
         faces.extend((e0, e1, k) for e0, e1 in sorted(horizon))

@@ -30,9 +30,7 @@ def read_stl(path: str | Path) -> tuple[Array, Array]:
             return verts, np.arange(len(verts), dtype=np.int64).reshape(-1, 3)
     text = data.decode("ascii", errors="replace")
     if not text.lstrip().lower().startswith("solid"):
-        raise ValueError(
-            f"{path}: not a binary STL (size does not match its triangle count) nor an ASCII STL"
-        )
+        raise ValueError(f"{path}: not a binary STL (size does not match its triangle count) nor an ASCII STL")
     coords = [line.split()[1:4] for line in text.splitlines() if line.strip().lower().startswith("vertex")]
     if not coords or len(coords) % 3:
         raise ValueError(f"{path}: ASCII STL without complete triangles")
@@ -70,9 +68,7 @@ def read_mesh_file(path: str | Path) -> tuple[Array, Array]:
         return read_stl(path)
     if suffix == ".obj":
         return read_obj(path)
-    raise ValueError(
-        f"{path}: unsupported mesh extension {suffix!r}; supported: {', '.join(MESH_EXTENSIONS)}"
-    )
+    raise ValueError(f"{path}: unsupported mesh extension {suffix!r}; supported: {', '.join(MESH_EXTENSIONS)}")
 
 
 def write_stl(path: str | Path, mesh: Mesh) -> None:

@@ -166,9 +166,7 @@ def _catmull_rom(y: Array, samples: int) -> Array:
     u = t - i
     p0, p1 = y[np.maximum(i - 1, 0)], y[i]
     p2, p3 = y[i + 1], y[np.minimum(i + 2, k - 1)]
-    return 0.5 * (
-        2 * p1 + (p2 - p0) * u + (2 * p0 - 5 * p1 + 4 * p2 - p3) * u**2 + (3 * p1 - p0 - 3 * p2 + p3) * u**3
-    )
+    return 0.5 * (2 * p1 + (p2 - p0) * u + (2 * p0 - 5 * p1 + 4 * p2 - p3) * u**2 + (3 * p1 - p0 - 3 * p2 + p3) * u**3)
 
 
 # ----------------------------------------------------------------------------------------------------------
@@ -493,9 +491,7 @@ def _mug(rng: np.random.Generator) -> Raw:
     for p in phi:
         centre = np.array([cx + rh * np.cos(p), 0.0, cz + rh * np.sin(p)])
         normal = np.array([np.cos(p), 0.0, np.sin(p)])
-        rings.append(
-            centre + rt * (np.cos(psi)[:, None] * normal + np.sin(psi)[:, None] * np.array([0, 1.0, 0]))
-        )
+        rings.append(centre + rt * (np.cos(psi)[:, None] * normal + np.sin(psi)[:, None] * np.array([0, 1.0, 0])))
     ends = [np.array([cx + rh * np.cos(p), 0.0, cz + rh * np.sin(p)]) for p in (phi[0], phi[-1])]
     handle = _surface(rings, ends[0], ends[1])
     return _combine([cup, handle])

@@ -253,8 +253,7 @@ def _grid(rng: np.random.Generator, size: int) -> Array:
     ly = _band(y * n + thick / 2, thick, per, size)
     line = np.maximum(lx, ly)
     img = (
-        np.broadcast_to(c[0], (size, size, 3))
-        * (1 + jit[(y * n).astype(int) % n, (x * n).astype(int) % n])[..., None]
+        np.broadcast_to(c[0], (size, size, 3)) * (1 + jit[(y * n).astype(int) % n, (x * n).astype(int) % n])[..., None]
     )
     if minor > 1:
         m = n * minor
@@ -446,9 +445,7 @@ def _terrazzo(rng: np.random.Generator, size: int) -> Array:
 def _camo(rng: np.random.Generator, size: int) -> Array:
     k = int(rng.integers(3, 5))
     if rng.random() < 0.5:  # military-ish greens/browns
-        c = np.stack(
-            [_hsv(rng.uniform(0.05, 0.3), rng.uniform(0.2, 0.6), rng.uniform(0.15, 0.7)) for _ in range(k)]
-        )
+        c = np.stack([_hsv(rng.uniform(0.05, 0.3), rng.uniform(0.2, 0.6), rng.uniform(0.15, 0.7)) for _ in range(k)])
     else:
         c = _palette(rng, k)
     f = int(rng.integers(2, 6))

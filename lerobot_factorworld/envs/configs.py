@@ -121,7 +121,14 @@ class FactorWorldEnvConfig(EnvConfig):
             if not train_configs:
                 raise ValueError(f"{self.configs_path} holds no configuration for task {task!r}")
         suites = evaluation_suites(
-            task, self.n_train_envs, self.train_factors, self.shifts, self.n_test_envs, self.seed, options, train_configs
+            task,
+            self.n_train_envs,
+            self.train_factors,
+            self.shifts,
+            self.n_test_envs,
+            self.seed,
+            options,
+            train_configs,
         )
         if not self.include_train:
             suites.pop(TRAIN_SUITE)

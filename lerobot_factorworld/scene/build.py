@@ -211,9 +211,7 @@ def _reshape_object(spec: mujoco.MjSpec, task: TaskSpec, shape: str | None, scal
     from ..assets import load_mesh
 
     mesh = load_mesh(shape)
-    main = next((g for g in geoms if g.name == "objGeom"), None) or next(
-        g for g in geoms if g.contype or g.conaffinity
-    )
+    main = next((g for g in geoms if g.name == "objGeom"), None) or next(g for g in geoms if g.contype or g.conaffinity)
     root = spec.body(task.object_bodies[0])
     keep_mass = not root.explicitinertial
     for geom in geoms:
@@ -244,8 +242,14 @@ def _reshape_object(spec: mujoco.MjSpec, task: TaskSpec, shape: str | None, scal
         # A hidden collision geom (its group may be the only one counted for inertia): add a massless
         # visible twin rather than moving it to a rendered group.
         twin = main.parent.add_geom(
-            name="fw_object_visual", type=mujoco.mjtGeom.mjGEOM_MESH, meshname="fw_object_mesh",
-            pos=main.pos, contype=0, conaffinity=0, group=1, mass=0.0,
+            name="fw_object_visual",
+            type=mujoco.mjtGeom.mjGEOM_MESH,
+            meshname="fw_object_mesh",
+            pos=main.pos,
+            contype=0,
+            conaffinity=0,
+            group=1,
+            mass=0.0,
         )
         twin.rgba = [0.8, 0.3, 0.2, 1.0]
     else:

@@ -10,7 +10,7 @@ Computed once per task and process, in the table frame.
 from __future__ import annotations
 
 import itertools
-from functools import lru_cache
+from functools import cache
 
 import mujoco
 import numpy as np
@@ -26,7 +26,7 @@ LOW_MARGIN = 0.05  # the gripper counts as "low" below the tallest distractor pl
 SWEEP_STEPS = 300
 
 
-@lru_cache(maxsize=None)
+@cache
 def keepout_boxes(task_name: str) -> np.ndarray:
     """(k, 4) boxes [xmin, ymin, xmax, ymax] in the table frame that distractors must not overlap."""
     from ..envs.factor_env import FactorWorldEnv

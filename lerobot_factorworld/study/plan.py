@@ -33,7 +33,11 @@ def evaluation_suites(
     train_configs: Sequence[SceneConfig] | None = None,
 ) -> dict[str, list[SceneConfig]]:
     """``{"train": [...], "<factor>": [...], "<a>+<b>": [...]}`` for one task."""
-    train = list(train_configs) if train_configs else sample_configs(task, n_train_envs, seed, "train", train_factors, options)
+    train = (
+        list(train_configs)
+        if train_configs
+        else sample_configs(task, n_train_envs, seed, "train", train_factors, options)
+    )
     suites = {TRAIN_SUITE: train}
     for k, shift in enumerate(shifts):
         factors = parse_shift(shift)

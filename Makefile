@@ -1,0 +1,29 @@
+# Factor World for LeRobot. `make demo` and `make test` do all set-up on a fresh machine first.
+VENV := .venv
+BIN := $(VENV)/bin
+STAMP := $(VENV)/.installed
+
+.PHONY: setup demo test test-fast lint bench
+
+setup: $(STAMP)
+
+$(STAMP): pyproject.toml scripts/setup.sh
+	bash scripts/setup.sh
+	touch $(STAMP)
+
+# The main job (for now): a contact sheet of pick-place under every factor of variation.
+demo: setup
+	$(BIN)/factorworld contact-sheet --task=pick-place --out=outputs/contact_sheet.png
+
+# The whole suite (real MuJoCo scenes, real lerobot-eval), on all cores.
+test: setup
+	$(BIN)/pytest -n auto -q
+
+test-fast: setup
+	$(BIN)/pytest -n auto -q -m "not slow"
+
+lint: setup
+	$(BIN)/ruff check .
+
+bench: setup
+	$(BIN)/python scripts/bench_env.py
