@@ -21,3 +21,14 @@ def test_readme_opens_with_the_two_commands_and_ci_runs_the_test_one():
     assert ci[-1] == "make test"
     head = readme[:1500]
     assert "make demo" in head and "make test" in head
+
+
+def test_config_files_parse_with_their_commands():
+    import draccus
+
+    from lerobot_factorworld.cli import SampleConfig
+    from lerobot_factorworld.contact_sheet import ContactSheetConfig
+
+    for name, cls in (("contact_sheet.yaml", ContactSheetConfig), ("sample_train_envs.yaml", SampleConfig)):
+        cfg = draccus.parse(cls, config_path=str(ROOT / "configs" / name), args=[])
+        assert cfg.task == "pick-place"
