@@ -6,6 +6,7 @@ Commands:
     cameras         the scene cameras
     sample          sample N environment configurations and save them as JSON
     contact-sheet   render a task under every factor (PNG)
+    collect         scripted demos -> LeRobotDataset with per-episode factor values (resumable)
 """
 
 from __future__ import annotations
@@ -89,12 +90,23 @@ def cmd_contact_sheet(args: list[str]) -> None:
     print(f"wrote {render_contact_sheet(cfg)}")
 
 
+def cmd_collect(args: list[str]) -> None:
+    from .datasets.collect import CollectConfig, collect
+
+    cfg = draccus.parse(CollectConfig, args=args)
+    report = collect(cfg)
+    print(f"wrote {report.episodes} episodes ({report.frames} frames) to {report.root} in {report.seconds:.1f} s")
+    for env, count in report.failures.items():
+        print(f"  {env}: {count} failed attempt(s) discarded")
+
+
 COMMANDS: dict[str, Callable[[list[str]], None]] = {
     "tasks": cmd_tasks,
     "factors": cmd_factors,
     "cameras": cmd_cameras,
     "sample": cmd_sample,
     "contact-sheet": cmd_contact_sheet,
+    "collect": cmd_collect,
 }
 
 
@@ -108,7 +120,7 @@ def main(argv: list[str] | None = None) -> None:
         raise SystemExit(f"unknown command {command!r}; valid commands: {', '.join(COMMANDS)}")
     try:
         COMMANDS[command](args)
-    except (ValueError, FileNotFoundError) as err:
+    except (ValueError, FileNotFoundError, FileExistsError) as err:
         raise SystemExit(f"error: {err}") from None
 
 

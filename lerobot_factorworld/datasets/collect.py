@@ -1,0 +1,426 @@
+"""``factorworld collect``: scripted demonstrations of Factor World environments as a LeRobotDataset.
+
+Work is split into jobs (one environment, up to ``episodes_per_shard`` demos) run by worker
+processes. Each job writes its own small LeRobotDataset in a staging folder and only renames it from
+``<job>.tmp`` to ``<job>`` after ``finalize()``: a crashed worker or a full disk can only lose the
+job in progress, and a re-run resumes from the finished jobs. When every job is done the shards are
+merged with LeRobot's ``aggregate_datasets`` (which keeps the factor columns) into ``root``.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import shutil
+import time
+from concurrent.futures import ProcessPoolExecutor, as_completed
+from dataclasses import asdict, dataclass, field
+from multiprocessing import get_context
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ..factors.registry import PAPER_STUDY_FACTORS
+
+MODES = ("new", "overwrite", "append")
+PLAN_FILE = "plan.json"
+JOB_RESULT_FILE = "factorworld_job.json"
+SIDECAR = "meta/factorworld.json"
+# Settings that do not change what gets collected (so they may differ on resume).
+RUN_ONLY_SETTINGS = ("workers", "mode", "push_to_hub", "private", "episodes_per_shard")
+
+
+@dataclass
+class CollectConfig:
+    """``factorworld collect``: scripted demos -> LeRobotDataset (v3) with per-episode factor values.
+
+    Attributes:
+        task: Task name, or a comma-separated list (one dataset, per-episode instruction).
+        factors: Factors varied across the environments (default: the paper's seven).
+        n_envs: Number of environments N per task.
+        demos: Total successful demos per task (spread evenly over the environments).
+        demos_per_env: If set, demos per environment instead of ``demos``.
+        split: Asset split the environments draw from (``train`` or ``eval``).
+        seed: Seed of the environments and of every episode (object start, action noise).
+        cameras: Comma-separated cameras, each stored as ``observation.images.<camera>``.
+        image_size: Square image side in pixels.
+        quality: Rendering quality (``fast`` or ``full``).
+        action_noise: Std of the Gaussian noise added to the expert's actions (public Factor World: 0.002).
+        end_on_success: End episodes at the first success (else run to ``max_episode_steps``).
+        max_episode_steps: Step limit per episode (``None``: the task's horizon).
+        max_attempts: Attempts per demo before it is reported as failed.
+        use_videos: Store images as MP4 video (default) or as PNG images in parquet.
+        root: Output dataset folder.
+        repo_id: Dataset id (``user/name``), used by LeRobot and for the Hub.
+        workers: Worker processes (0: all cores).
+        episodes_per_shard: Demos per job; a crash loses at most one job per worker.
+        mode: ``new`` (refuses to touch a different existing dataset; resumes an identical one),
+            ``overwrite`` (deletes what is at ``root``), ``append`` (adds these demos to it).
+        push_to_hub: Push with LeRobot's mechanism (card, tags) when done.
+        private: Push as a private dataset.
+        widths / texture_folder / shape_folder / rgb_fraction / n_distractors: see ``SamplingOptions``.
+    """
+
+    task: str = "pick-place"
+    factors: list[str] = field(default_factory=lambda: list(PAPER_STUDY_FACTORS))
+    n_envs: int = 5
+    demos: int = 20
+    demos_per_env: int | None = None
+    split: str = "train"
+    seed: int = 0
+    cameras: str = "front"
+    image_size: int = 84
+    quality: str = "fast"
+    action_noise: float = 0.002
+    end_on_success: bool = True
+    max_episode_steps: int | None = None
+    max_attempts: int = 3
+    use_videos: bool = True
+    root: str = "outputs/datasets/factorworld_pick-place"
+    repo_id: str = "local/factorworld_pick-place"
+    workers: int = 0
+    episodes_per_shard: int = 10
+    mode: str = "new"
+    push_to_hub: bool = False
+    private: bool = False
+    widths: dict[str, str] = field(default_factory=dict)
+    texture_folder: str | None = None
+    shape_folder: str | None = None
+    rgb_fraction: float = 0.0
+    n_distractors: int = 1
+
+    def __post_init__(self) -> None:
+        from ..scene.cameras import check_camera_names
+        from ..tasks import get_task
+
+        for task in self.task_names:
+            get_task(task)
+        check_camera_names(self.camera_names)
+        if self.mode not in MODES:
+            raise ValueError(f"unknown mode {self.mode!r}; valid modes: {', '.join(MODES)}")
+        if self.n_envs < 1 or (self.demos_per_env or self.demos) < 1:
+            raise ValueError("n_envs and demos (or demos_per_env) must be at least 1")
+        if "/" not in self.repo_id:
+            raise ValueError(f"repo_id must look like 'user/name', got {self.repo_id!r}")
+
+    @property
+    def task_names(self) -> list[str]:
+        return [t.strip() for t in self.task.split(",") if t.strip()]
+
+    @property
+    def camera_names(self) -> tuple[str, ...]:
+        return tuple(c.strip() for c in self.cameras.split(",") if c.strip())
+
+    def fingerprint(self) -> dict[str, Any]:
+        """The settings that determine the collected data."""
+        settings = asdict(self)
+        for key in (*RUN_ONLY_SETTINGS, "root"):
+            settings.pop(key)
+        return settings
+
+
+@dataclass(frozen=True)
+class Job:
+    """Demos ``demo_indices`` of environment ``env_index`` of ``task``."""
+
+    job_id: str
+    task: str
+    task_index: int
+    env_index: int
+    config: dict
+    demo_indices: tuple[int, ...]
+
+
+@dataclass
+class CollectReport:
+    root: Path
+    episodes: int
+    frames: int
+    failures: dict[str, int]
+    seconds: float
+
+
+def plan_jobs(cfg: CollectConfig) -> list[Job]:
+    """Every job of the collection, in a deterministic order."""
+    from ..factors.sampling import SamplingOptions, sample_configs
+
+    options = SamplingOptions(
+        widths=dict(cfg.widths),
+        texture_folder=cfg.texture_folder,
+        shape_folder=cfg.shape_folder,
+        rgb_fraction=cfg.rgb_fraction,
+        n_distractors=cfg.n_distractors,
+    )
+    jobs = []
+    for task_index, task in enumerate(cfg.task_names):
+        configs = sample_configs(task, cfg.n_envs, cfg.seed, cfg.split, cfg.factors, options)
+        for env_index, config in enumerate(configs):
+            if cfg.demos_per_env is not None:
+                count = cfg.demos_per_env
+            else:
+                count = cfg.demos // cfg.n_envs + (1 if env_index < cfg.demos % cfg.n_envs else 0)
+            demos = tuple(range(count))
+            for part, start in enumerate(range(0, count, cfg.episodes_per_shard)):
+                jobs.append(
+                    Job(
+                        f"{task}__env{env_index:03d}__part{part:03d}",
+                        task,
+                        task_index,
+                        env_index,
+                        config.to_dict(),
+                        demos[start : start + cfg.episodes_per_shard],
+                    )
+                )
+    return jobs
+
+
+def episode_seed(cfg_seed: int, task_index: int, env_index: int, demo: int, attempt: int) -> int:
+    return int(np.random.SeedSequence([cfg_seed, task_index, env_index, demo, attempt]).generate_state(1)[0])
+
+
+def staging_dir(root: Path) -> Path:
+    return root.parent / f"{root.name}.parts"
+
+
+def collect(cfg: CollectConfig) -> CollectReport:
+    """Run (or resume) a collection and merge it into ``cfg.root``."""
+    from tqdm import tqdm
+
+    start = time.perf_counter()
+    _quiet_encoder()
+    root = Path(cfg.root).resolve()
+    parts = staging_dir(root)
+    _prepare(cfg, root, parts)
+    jobs = plan_jobs(cfg)
+    done = {job.job_id for job in jobs if (parts / job.job_id / JOB_RESULT_FILE).is_file()}
+    todo = [job for job in jobs if job.job_id not in done]
+    for stale in parts.glob("*.tmp"):  # a job interrupted by a crash: redo it from scratch
+        shutil.rmtree(stale)
+    total = sum(len(job.demo_indices) for job in todo)
+    workers = cfg.workers or os.cpu_count() or 1
+    errors: dict[str, str] = {}
+    if todo:
+        settings = asdict(cfg)
+        with tqdm(total=total, desc="collecting demos", unit="demo") as bar:
+            if workers == 1:
+                for job in todo:
+                    bar.update(len(run_job(job, settings, str(parts))["episodes"]) or len(job.demo_indices))
+            else:
+                context = get_context("forkserver")
+                with ProcessPoolExecutor(workers, mp_context=context, initializer=_worker_init) as pool:
+                    futures = {pool.submit(run_job, job, settings, str(parts)): job for job in todo}
+                    for future in as_completed(futures):
+                        job = futures[future]
+                        try:
+                            future.result()
+                        except Exception as err:  # a worker died: keep going, report, resume later
+                            errors[job.job_id] = repr(err)
+                        bar.update(len(job.demo_indices))
+    if errors:
+        raise RuntimeError(
+            f"{len(errors)} job(s) failed and were not merged (finished jobs are kept in {parts}; "
+            f"re-run the same command to resume): {errors}"
+        )
+    results = [json.loads((parts / job.job_id / JOB_RESULT_FILE).read_text()) for job in jobs]
+    failures = {f"{r['task']}/{r['env_id']}": r["failures"] for r in results if r["failures"]}
+    episodes, frames = _merge(cfg, root, parts, jobs, results)
+    if cfg.push_to_hub:
+        from .hub import push_dataset
+
+        push_dataset(root, cfg.repo_id, private=cfg.private)
+    return CollectReport(root, episodes, frames, failures, time.perf_counter() - start)
+
+
+def _worker_init() -> None:
+    # One llvmpipe thread per process: workers already use every core between them.
+    os.environ.setdefault("LP_NUM_THREADS", "1")
+    _quiet_encoder()
+
+
+def _quiet_encoder() -> None:
+    os.environ.setdefault("SVT_LOG", "1")  # SVT-AV1 otherwise prints its whole configuration per video
+
+
+def _prepare(cfg: CollectConfig, root: Path, parts: Path) -> None:
+    """Refuse to mix different settings; resume identical ones; overwrite or append on request."""
+    fingerprint = cfg.fingerprint()
+    plan_path = parts / PLAN_FILE
+    if cfg.mode == "overwrite":
+        for path in (root, parts):
+            if path.exists():
+                shutil.rmtree(path)
+    elif root.exists() and cfg.mode == "new" and not plan_path.is_file():
+        previous = _read_sidecar(root)
+        if previous is None or previous.get("settings") != fingerprint:
+            diff = _settings_diff(previous.get("settings", {}) if previous else {}, fingerprint)
+            raise FileExistsError(
+                f"{root} already holds a dataset collected with other settings ({diff}); nothing was changed. "
+                "Pass --mode=overwrite to replace it or --mode=append to add these demos to it."
+            )
+        if not list(parts.glob("*")) and previous is not None:
+            raise FileExistsError(f"{root} is already complete with these settings; use --mode=append to add more")
+    if plan_path.is_file():
+        previous = json.loads(plan_path.read_text())
+        if previous["settings"] != fingerprint:
+            raise FileExistsError(
+                f"an unfinished collection with other settings is staged in {parts} "
+                f"({_settings_diff(previous['settings'], fingerprint)}); re-run it with its settings to finish it, "
+                "or pass --mode=overwrite to discard it"
+            )
+    parts.mkdir(parents=True, exist_ok=True)
+    _atomic_write(plan_path, json.dumps({"settings": fingerprint, "mode": cfg.mode}, indent=1, sort_keys=True))
+
+
+def _settings_diff(old: dict, new: dict) -> str:
+    keys = sorted(k for k in set(old) | set(new) if old.get(k) != new.get(k))
+    return ", ".join(f"{k}: {old.get(k)!r} -> {new.get(k)!r}" for k in keys) or "unknown settings"
+
+
+def run_job(job: Job, settings: dict, parts_dir: str) -> dict:
+    """Collect one job's demos into ``<parts>/<job_id>`` (atomically). Runs in a worker process."""
+    from lerobot.datasets.lerobot_dataset import LeRobotDataset
+
+    from ..envs.factor_env import CONTROL_FPS, FactorWorldEnv
+    from ..experts import expert_action, expert_policy
+    from ..factors.values import SceneConfig
+    from .schema import ENV_ID_COLUMN, SPLIT_COLUMN, encode_factors, frame_features
+
+    cfg = CollectConfig(**settings)
+    parts = Path(parts_dir)
+    tmp, final = parts / f"{job.job_id}.tmp", parts / job.job_id
+    if tmp.exists():
+        shutil.rmtree(tmp)
+    config = SceneConfig.from_dict(job.config)
+    cameras, size = cfg.camera_names, (cfg.image_size, cfg.image_size)
+    env = FactorWorldEnv(
+        job.task,
+        config,
+        cameras=cameras,
+        image_size=cfg.image_size,
+        quality=cfg.quality,
+        max_episode_steps=cfg.max_episode_steps,
+        terminate_on_success=cfg.end_on_success,
+        scene_cache_size=1,
+    )
+    policy = expert_policy(job.task)
+    dataset = LeRobotDataset.create(
+        repo_id=f"local/{job.job_id}",
+        fps=CONTROL_FPS,
+        features=frame_features(cameras, size, cfg.use_videos),
+        root=tmp,
+        robot_type="sawyer",
+        use_videos=cfg.use_videos,
+    )
+    episode_columns: dict[str, Any] = {}
+    original_save = dataset.meta.save_episode
+
+    def save_with_factors(episode_index, episode_length, episode_tasks, episode_stats, episode_metadata):
+        return original_save(
+            episode_index, episode_length, episode_tasks, episode_stats, {**episode_metadata, **episode_columns}
+        )
+
+    dataset.meta.save_episode = save_with_factors
+    episodes, failures = [], 0
+    try:
+        for demo in job.demo_indices:
+            for attempt in range(cfg.max_attempts):
+                seed = episode_seed(cfg.seed, job.task_index, job.env_index, demo, attempt)
+                frames, info = _rollout(env, policy, seed, cfg.action_noise, expert_action)
+                if info["is_success"]:
+                    break
+                failures += 1
+            else:
+                continue
+            for frame in frames:
+                dataset.add_frame(frame)
+            episode_columns.clear()
+            episode_columns.update(
+                {ENV_ID_COLUMN: config.env_id, SPLIT_COLUMN: config.split, **encode_factors(info["factors"])}
+            )
+            episode_columns["factorworld/seed"] = seed
+            episode_columns["factorworld/demo"] = demo
+            dataset.save_episode()
+            episodes.append({"demo": demo, "seed": seed, "length": len(frames)})
+    finally:
+        dataset.finalize()
+        env.close()
+    result = {
+        "job_id": job.job_id,
+        "task": job.task,
+        "env_id": config.env_id,
+        "episodes": episodes,
+        "failures": failures,
+        "config": job.config,
+    }
+    _atomic_write(tmp / JOB_RESULT_FILE, json.dumps(result, indent=1))
+    if final.exists():
+        shutil.rmtree(final)
+    tmp.rename(final)  # the job counts as done only once its shard is complete
+    return result
+
+
+def _rollout(env, policy, seed: int, noise: float, expert_action) -> tuple[list[dict], dict]:
+    from lerobot.utils.constants import ACTION, OBS_IMAGES, OBS_STATE
+
+    obs, info = env.reset(seed=seed)
+    rng = np.random.default_rng(seed)
+    frames = []
+    for _ in range(env._max_episode_steps):
+        action = expert_action(policy, env.state_observation, rng, noise)
+        frame = {f"{OBS_IMAGES}.{cam}": image for cam, image in obs["pixels"].items()}
+        frame.update({OBS_STATE: obs["agent_pos"], ACTION: action, "task": env.task_description})
+        frames.append(frame)
+        obs, _, terminated, truncated, info = env.step(action)
+        if terminated or truncated:
+            break
+    return frames, info
+
+
+def _merge(cfg: CollectConfig, root: Path, parts: Path, jobs: list[Job], results: list[dict]) -> tuple[int, int]:
+    from lerobot.datasets.aggregate import aggregate_datasets
+    from lerobot.datasets.lerobot_dataset import LeRobotDatasetMetadata
+
+    sources = [parts / job.job_id for job, r in zip(jobs, results, strict=True) if r["episodes"]]
+    repo_ids = [f"local/{path.name}" for path in sources]
+    if cfg.mode == "append" and root.exists():
+        sources.insert(0, root)
+        repo_ids.insert(0, cfg.repo_id)
+    if not sources:
+        raise RuntimeError("no successful demo was collected; nothing to write (see the failures per environment)")
+    merged = root.parent / f"{root.name}.merging"
+    if merged.exists():
+        shutil.rmtree(merged)
+    aggregate_datasets(repo_ids, cfg.repo_id, roots=sources, aggr_root=merged)
+    sidecar = {
+        "settings": cfg.fingerprint(),
+        "environments": sorted({json.dumps(r["config"], sort_keys=True) for r in results}),
+        "failures": {r["job_id"]: r["failures"] for r in results},
+    }
+    sidecar["environments"] = [json.loads(c) for c in sidecar["environments"]]
+    _atomic_write(merged / SIDECAR, json.dumps(sidecar, indent=1, sort_keys=True))
+    # Swap in the merged dataset only now: until here the previous dataset (if any) is untouched.
+    backup = root.parent / f"{root.name}.previous"
+    if root.exists():
+        root.rename(backup)
+    merged.rename(root)
+    if backup.exists():
+        shutil.rmtree(backup)
+    shutil.rmtree(parts)
+    meta = LeRobotDatasetMetadata(cfg.repo_id, root=root)
+    from .card import write_card
+
+    write_card(root, cfg.repo_id)
+    return meta.total_episodes, meta.total_frames
+
+
+def _read_sidecar(root: Path) -> dict | None:
+    path = root / SIDECAR
+    return json.loads(path.read_text()) if path.is_file() else None
+
+
+def _atomic_write(path: Path, text: str) -> None:
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_suffix(path.suffix + ".tmp")
+    tmp.write_text(text)
+    tmp.replace(path)
