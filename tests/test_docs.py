@@ -28,7 +28,12 @@ def test_config_files_parse_with_their_commands():
 
     from lerobot_factorworld.cli import SampleConfig
     from lerobot_factorworld.contact_sheet import ContactSheetConfig
+    from lerobot_factorworld.datasets.collect import CollectConfig
 
-    for name, cls in (("contact_sheet.yaml", ContactSheetConfig), ("sample_train_envs.yaml", SampleConfig)):
+    for name, cls in (
+        ("contact_sheet.yaml", ContactSheetConfig),
+        ("sample_train_envs.yaml", SampleConfig),
+        ("collect_pick_place.yaml", CollectConfig),
+    ):
         cfg = draccus.parse(cls, config_path=str(ROOT / "configs" / name), args=[])
         assert cfg.task == "pick-place"
