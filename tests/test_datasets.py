@@ -175,3 +175,48 @@ def test_lerobot_train_runs_on_the_collected_dataset(dataset, tmp_path):
     out = subprocess.run(cmd, capture_output=True, text=True, timeout=600)
     assert out.returncode == 0, out.stderr[-3000:]
     assert (tmp_path / "train" / "checkpoints" / "000003" / "pretrained_model" / "model.safetensors").is_file()
+
+
+def test_full_disk_keeps_finished_shards_and_a_rerun_completes(tmp_path, monkeypatch):
+    import errno
+
+    from lerobot.datasets.lerobot_dataset import LeRobotDataset
+
+    root = tmp_path / "disk"
+    original, calls = LeRobotDataset.save_episode, []
+
+    def failing_save(self, *args, **kwargs):
+        calls.append(1)
+        if len(calls) == 2:
+            raise OSError(errno.ENOSPC, "No space left on device")
+        return original(self, *args, **kwargs)
+
+    monkeypatch.setattr(LeRobotDataset, "save_episode", failing_save)
+    with pytest.raises(RuntimeError, match="re-run the same command to resume"):
+        collect(tiny(root, factors=["light"]))
+    finished = [p for p in staging_dir(root).glob("*") if p.is_dir() and not p.name.endswith(".tmp")]
+    assert len(finished) == 1 and not root.exists()
+    monkeypatch.setattr(LeRobotDataset, "save_episode", original)
+    report = collect(tiny(root, factors=["light"]))
+    assert report.episodes == 4
+
+
+def test_several_tasks_in_one_video_dataset_and_append(tmp_path):
+    from lerobot.datasets.lerobot_dataset import LeRobotDataset
+
+    root = tmp_path / "multi"
+    settings = dict(task="pick-place,door-open", n_envs=1, demos_per_env=1, factors=["table_texture"], use_videos=True)
+    collect(tiny(root, **settings))
+    ds = LeRobotDataset("local/multi", root=root)
+    assert ds.meta.features["observation.images.front"]["dtype"] == "video"
+    assert {ds[int(i)]["task"] for i in (0, len(ds) - 1)} == {
+        "pick up the puck and place it at the blue goal",
+        "open the door",
+    }
+    assert [r["tasks"] for r in episode_records("local/multi", root)] == [
+        ["pick up the puck and place it at the blue goal"],
+        ["open the door"],
+    ]
+    collect(tiny(root, **settings, seed=5, mode="append"))
+    records = episode_records("local/multi", root)
+    assert len(records) == 4 and len(json.loads((root / "meta" / "factorworld.json").read_text())["history"]) == 1

@@ -205,7 +205,12 @@ def collect(cfg: CollectConfig) -> CollectReport:
         with tqdm(total=total, desc="collecting demos", unit="demo") as bar:
             if workers == 1:
                 for job in todo:
-                    bar.update(len(run_job(job, settings, str(parts))["episodes"]) or len(job.demo_indices))
+                    try:
+                        run_job(job, settings, str(parts))
+                    except Exception as err:  # e.g. a full disk: keep the finished shards, report
+                        errors[job.job_id] = repr(err)
+                        break
+                    bar.update(len(job.demo_indices))
             else:
                 context = get_context("forkserver")
                 with ProcessPoolExecutor(workers, mp_context=context, initializer=_worker_init) as pool:
@@ -392,12 +397,21 @@ def _merge(cfg: CollectConfig, root: Path, parts: Path, jobs: list[Job], results
     if merged.exists():
         shutil.rmtree(merged)
     aggregate_datasets(repo_ids, cfg.repo_id, roots=sources, aggr_root=merged)
+    environments = [r["config"] for r in results]
+    failures = {r["job_id"]: r["failures"] for r in results}
+    history = []
+    previous = _read_sidecar(root) if cfg.mode == "append" else None
+    if previous is not None:  # appended: keep what the earlier collections recorded
+        environments = previous["environments"] + environments
+        failures = {**previous["failures"], **failures}
+        history = [*previous.get("history", []), previous["settings"]]
+    unique = sorted({json.dumps(c, sort_keys=True) for c in environments})
     sidecar = {
         "settings": cfg.fingerprint(),
-        "environments": sorted({json.dumps(r["config"], sort_keys=True) for r in results}),
-        "failures": {r["job_id"]: r["failures"] for r in results},
+        "history": history,
+        "environments": [json.loads(c) for c in unique],
+        "failures": failures,
     }
-    sidecar["environments"] = [json.loads(c) for c in sidecar["environments"]]
     _atomic_write(merged / SIDECAR, json.dumps(sidecar, indent=1, sort_keys=True))
     # Swap in the merged dataset only now: until here the previous dataset (if any) is untouched.
     backup = root.parent / f"{root.name}.previous"
