@@ -1,0 +1,170 @@
+"""``RT1Config`` (``--policy.type=rt1``): RT-1's architecture with named presets.
+
+Presets fill every architecture field left unset (``None``); anything given explicitly wins, and the
+saved ``config.json`` holds the resolved values, so a checkpoint reloads exactly.
+
+==========  ==================================================  =========================================
+preset      backbone / transformer                              for
+==========  ==================================================  =========================================
+``rt1``     FiLM-EfficientNet-B3 @300 px, 8 layers x d512 x 8    faithful RT-1 (~35M params), GPU
+            heads, RT-1's linear feed-forward
+``lite0``   FiLM-EfficientNet-Lite0 @128 px with packaged        a pretrained backbone that works offline
+            ImageNet weights, 4 layers x d256
+``small``   tiny FiLM-MBConv net @84 px, 2 layers x d128         2 CPU cores: tests and the embedded demo
+==========  ==================================================  =========================================
+
+``factorworld rt1-presets`` prints each preset's parameter count.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field, fields
+
+from lerobot.configs import FeatureType, NormalizationMode, PreTrainedConfig
+from lerobot.optim import AdamWConfig
+
+PRESETS: dict[str, dict] = {
+    "rt1": dict(
+        backbone="efficientnet_b3",
+        pretrained_backbone=False,
+        image_size=300,
+        token_dim=512,
+        dim=512,
+        layers=8,
+        heads=8,
+        head_dim=128,
+        ffn="rt1",
+        ffn_dim=512,
+        crop="random_resized",
+        optimizer_lr=1e-4,
+    ),
+    "lite0": dict(
+        backbone="efficientnet_lite0",
+        pretrained_backbone=True,
+        image_size=128,
+        token_dim=256,
+        dim=256,
+        layers=4,
+        heads=4,
+        head_dim=64,
+        ffn="mlp",
+        ffn_dim=1024,
+        crop="shift",
+        optimizer_lr=3e-4,
+    ),
+    "small": dict(
+        backbone="tiny",
+        pretrained_backbone=False,
+        image_size=84,
+        token_dim=128,
+        dim=128,
+        layers=2,
+        heads=4,
+        head_dim=32,
+        ffn="mlp",
+        ffn_dim=256,
+        crop="shift",
+        optimizer_lr=3e-4,
+    ),
+}
+CROPS = ("shift", "random_resized", "none")
+LANGUAGE_EMBEDDING_KEY = "observation.language.embedding"
+
+
+@PreTrainedConfig.register_subclass("rt1")
+@dataclass
+class RT1Config(PreTrainedConfig):
+    """RT-1 policy configuration.
+
+    Attributes:
+        preset: Named architecture (``rt1``, ``lite0``, ``small``) filling the fields left ``None``.
+        n_obs_steps: History length (RT-1: 6 frames); actions are predicted for every step.
+        action_bins: Uniform bins per action dimension (RT-1: 256), over the min-max normalised range.
+        num_tokens: TokenLearner tokens per frame and camera (RT-1: 8).
+        backbone: ``efficientnet_b3``, ``efficientnet_lite0`` or ``tiny``.
+        pretrained_backbone: Load ImageNet weights (lite0: shipped; b3: from ``backbone_weights_path``).
+        backbone_weights_path: Local torchvision EfficientNet-B3 state dict (never downloaded).
+        image_size: Side the frames are resized to before the backbone.
+        token_dim: Channels of the FiLM-EfficientNet output (1x1 conv) and of each image token.
+        dim / layers / heads / head_dim / ffn / ffn_dim / dropout: the transformer (RT-1: 8 heads of 128 on
+            d512; ``ffn="rt1"``: the reference's single linear feed-forward layer).
+        crop: Training crop augmentation: ``shift`` (pad ``crop_pad`` px and crop back, for small images),
+            ``random_resized`` (random ``crop_scale`` crop of the full frame, resized; center crop at eval)
+            or ``none``.
+        photometric: Brightness shift in [-0.125, 0.125], contrast and saturation factors in [0.5, 1.5].
+        token_reuse: At inference, tokenize only the new frame and reuse the window's earlier tokens.
+        language_dim: Size of the sentence embedding (MiniLM-L6: 384).
+    """
+
+    preset: str = "small"
+    n_obs_steps: int = 6
+    action_bins: int = 256
+    num_tokens: int = 8
+    backbone: str | None = None
+    pretrained_backbone: bool | None = None
+    backbone_weights_path: str | None = None
+    image_size: int | None = None
+    token_dim: int | None = None
+    dim: int | None = None
+    layers: int | None = None
+    heads: int | None = None
+    head_dim: int | None = None
+    ffn: str | None = None
+    ffn_dim: int | None = None
+    dropout: float = 0.1
+    crop: str | None = None
+    crop_pad: int = 4
+    crop_scale: float = 0.9
+    photometric: bool = True
+    token_reuse: bool = True
+    language_dim: int = 384
+    optimizer_lr: float | None = None
+    optimizer_weight_decay: float = 0.0
+    normalization_mapping: dict[str, NormalizationMode] = field(
+        default_factory=lambda: {
+            "VISUAL": NormalizationMode.IDENTITY,
+            "STATE": NormalizationMode.MEAN_STD,
+            "ACTION": NormalizationMode.MIN_MAX,  # to [-1, 1]: the bins span the dataset's min..max
+        }
+    )
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        if self.preset not in PRESETS:
+            raise ValueError(f"unknown RT-1 preset {self.preset!r}; valid presets: {', '.join(PRESETS)}")
+        names = {f.name for f in fields(self)}
+        for key, value in PRESETS[self.preset].items():
+            assert key in names, key
+            if getattr(self, key) is None:
+                setattr(self, key, value)
+        if self.crop not in CROPS:
+            raise ValueError(f"unknown crop {self.crop!r}; valid: {', '.join(CROPS)}")
+        if self.n_obs_steps < 1 or self.action_bins < 2:
+            raise ValueError("n_obs_steps must be >= 1 and action_bins >= 2")
+
+    def validate_features(self) -> None:
+        if not self.image_features:
+            raise ValueError("RT-1 needs at least one image feature (observation.image or observation.images.*)")
+        if self.action_feature is None:
+            raise ValueError("RT-1 needs an 'action' output feature")
+        for key, feature in self.image_features.items():
+            if feature.type is not FeatureType.VISUAL:
+                raise ValueError(f"{key} is not a visual feature")
+
+    @property
+    def observation_delta_indices(self) -> list[int]:
+        return list(range(1 - self.n_obs_steps, 1))
+
+    @property
+    def action_delta_indices(self) -> list[int]:
+        return list(range(1 - self.n_obs_steps, 1))  # RT-1 predicts the action of every step in the window
+
+    @property
+    def reward_delta_indices(self) -> None:
+        return None
+
+    def get_optimizer_preset(self) -> AdamWConfig:
+        return AdamWConfig(lr=self.optimizer_lr, weight_decay=self.optimizer_weight_decay)
+
+    def get_scheduler_preset(self) -> None:
+        return None

@@ -1,0 +1,194 @@
+"""``RT1Policy``: LeRobot shell (history, loss, token reuse) around the plain ``RT1`` network.
+
+Shapes: B batch, T history steps (``n_obs_steps``), K cameras, N = K * num_tokens image tokens per
+step, A action dimensions, V = action_bins.
+"""
+
+from __future__ import annotations
+
+from collections import deque
+
+import torch
+import torch.nn.functional as F  # noqa: N812
+from lerobot.policies.pretrained import PreTrainedPolicy
+from lerobot.utils.constants import ACTION
+from torch import Tensor, nn
+
+from .configuration_rt1 import LANGUAGE_EMBEDDING_KEY, RT1Config
+from .film_efficientnet import FiLMEfficientNet
+from .tokenizers import ActionTokenizer, TokenLearner
+from .transformer import RT1Transformer
+
+BRIGHTNESS = 0.125
+CONTRAST = (0.5, 1.5)
+SATURATION = (0.5, 1.5)
+
+
+class RT1(nn.Module):
+    """Images (B, T, 3, H, W) per camera + instruction embedding (B, D) -> action logits (B, T, A, V)."""
+
+    def __init__(self, config: RT1Config, camera_keys: list[str], action_dim: int) -> None:
+        super().__init__()
+        self.config, self.camera_keys = config, camera_keys
+        self.encoder = FiLMEfficientNet(
+            config.backbone,
+            config.language_dim,
+            config.token_dim,
+            config.pretrained_backbone,
+            config.backbone_weights_path,
+        )
+        self.token_learner = TokenLearner(config.token_dim, config.num_tokens)
+        self.transformer = RT1Transformer(
+            config.token_dim,
+            config.dim,
+            config.layers,
+            config.heads,
+            config.n_obs_steps,
+            config.num_tokens * len(camera_keys),
+            action_dim,
+            config.action_bins,
+            config.ffn,
+            config.ffn_dim,
+            config.dropout,
+            config.head_dim,
+        )
+
+    def frame_tokens(self, images: dict[str, Tensor], language: Tensor) -> Tensor:
+        """Tokens of single frames: images[cam] (M, 3, H, W), language (M, D) -> (M, N, token_dim)."""
+        tokens = []
+        for key in self.camera_keys:
+            x = self.prepare(images[key])
+            tokens.append(self.token_learner(self.encoder(x, language)))
+        return torch.cat(tokens, dim=1)
+
+    def forward(self, images: dict[str, Tensor], language: Tensor) -> Tensor:
+        b, t = next(iter(images.values())).shape[:2]
+        flat = {k: v.flatten(0, 1) for k, v in images.items()}  # (B*T, 3, H, W)
+        tokens = self.frame_tokens(flat, language.repeat_interleave(t, dim=0))
+        return self.transformer(tokens.view(b, t, *tokens.shape[1:]))
+
+    # --- image preparation and augmentation (each frame independently, training only) ----------
+
+    def prepare(self, x: Tensor) -> Tensor:
+        cfg = self.config
+        if self.training and cfg.crop == "shift":
+            x = random_shift(x, cfg.crop_pad)
+        elif cfg.crop == "random_resized":
+            x = random_crop(x, cfg.crop_scale) if self.training else center_crop(x, cfg.crop_scale)
+        if x.shape[-1] != cfg.image_size or x.shape[-2] != cfg.image_size:
+            x = F.interpolate(x, size=(cfg.image_size, cfg.image_size), mode="bilinear", align_corners=False)
+        if self.training and cfg.photometric:
+            x = photometric(x)
+        return x
+
+
+def random_shift(x: Tensor, pad: int) -> Tensor:
+    """DrQ-style shift: replicate-pad by ``pad`` and crop back at a random offset per image."""
+    n, _, h, w = x.shape
+    padded = F.pad(x, (pad, pad, pad, pad), mode="replicate")
+    dx = torch.randint(0, 2 * pad + 1, (n,), device=x.device)
+    dy = torch.randint(0, 2 * pad + 1, (n,), device=x.device)
+    rows = (dy[:, None] + torch.arange(h, device=x.device)[None]).view(n, 1, h, 1).expand(n, x.shape[1], h, w + 2 * pad)
+    out = padded.gather(2, rows)
+    cols = (dx[:, None] + torch.arange(w, device=x.device)[None]).view(n, 1, 1, w).expand(n, x.shape[1], h, w)
+    return out.gather(3, cols)
+
+
+def random_crop(x: Tensor, scale: float) -> Tensor:
+    """A random ``scale`` x ``scale`` crop of each frame (resized back by the caller)."""
+    n, _, h, w = x.shape
+    ch, cw = max(1, round(h * scale)), max(1, round(w * scale))
+    top = torch.randint(0, h - ch + 1, (n,)).tolist()
+    left = torch.randint(0, w - cw + 1, (n,)).tolist()
+    return torch.stack([x[i, :, t : t + ch, s : s + cw] for i, (t, s) in enumerate(zip(top, left, strict=True))])
+
+
+def center_crop(x: Tensor, scale: float) -> Tensor:
+    h, w = x.shape[-2:]
+    ch, cw = max(1, round(h * scale)), max(1, round(w * scale))
+    top, left = (h - ch) // 2, (w - cw) // 2
+    return x[..., top : top + ch, left : left + cw]
+
+
+def photometric(x: Tensor) -> Tensor:
+    """RT-1's photometric distortion per image: brightness shift, then contrast, then saturation."""
+    n = x.shape[0]
+    rand = lambda low, high: torch.empty(n, 1, 1, 1, device=x.device).uniform_(low, high)  # noqa: E731
+    x = x + rand(-BRIGHTNESS, BRIGHTNESS)
+    mean = x.mean(dim=(1, 2, 3), keepdim=True)
+    x = (x - mean) * rand(*CONTRAST) + mean
+    gray = 0.299 * x[:, 0:1] + 0.587 * x[:, 1:2] + 0.114 * x[:, 2:3]
+    x = gray + (x - gray) * rand(*SATURATION)
+    return x.clamp(0.0, 1.0)
+
+
+class RT1Policy(PreTrainedPolicy):
+    """RT-1 for LeRobot (``--policy.type=rt1``)."""
+
+    config_class = RT1Config
+    name = "rt1"
+
+    def __init__(self, config: RT1Config, dataset_stats=None, dataset_meta=None, **kwargs) -> None:
+        super().__init__(config)
+        config.validate_features()
+        self.config = config
+        self.camera_keys = sorted(config.image_features)
+        self.action_dim = config.action_feature.shape[0]
+        self.model = RT1(config, self.camera_keys, self.action_dim)
+        self.action_tokenizer = ActionTokenizer(config.action_bins)
+        self.reset()
+
+    def get_optim_params(self):
+        return self.parameters()
+
+    def reset(self) -> None:
+        """Forget the history (each rollout starts with an empty window)."""
+        self._tokens: deque[Tensor] = deque(maxlen=self.config.n_obs_steps)
+        self._frames: deque[dict[str, Tensor]] = deque(maxlen=self.config.n_obs_steps)
+        self._language: Tensor | None = None
+
+    def forward(self, batch: dict[str, Tensor], reduction: str = "mean") -> tuple[Tensor, dict]:
+        images = {key: batch[key] for key in self.camera_keys}  # (B, T, 3, H, W)
+        logits = self.model(images, batch[LANGUAGE_EMBEDDING_KEY])  # (B, T, A, V)
+        actions = batch[ACTION]  # (B, T, A), min-max normalised to [-1, 1]
+        valid = ~batch["action_is_pad"] if "action_is_pad" in batch else None
+        loss = self.action_tokenizer.loss(logits, actions, valid)
+        with torch.no_grad():
+            hits = (logits.argmax(-1) == self.action_tokenizer.tokenize(actions)).float()
+            accuracy = (hits.mean(-1)[valid] if valid is not None else hits).mean().item()
+        if reduction == "none":
+            per_sample = self.action_tokenizer.loss(logits, actions, valid)  # scalar: LeRobot only needs mean
+            return per_sample.expand(actions.shape[0]), {"token_accuracy": accuracy}
+        return loss, {"token_accuracy": accuracy}
+
+    @torch.no_grad()
+    def predict_action_chunk(self, batch: dict[str, Tensor], **kwargs) -> Tensor:
+        return self.select_action(batch).unsqueeze(1)
+
+    @torch.no_grad()
+    def select_action(self, batch: dict[str, Tensor], **kwargs) -> Tensor:
+        """One new frame per call: (B, 3, H, W) per camera -> action (B, A) for the current step."""
+        self.eval()
+        language = batch[LANGUAGE_EMBEDDING_KEY]
+        frame = {key: batch[key] for key in self.camera_keys}
+        if self.config.token_reuse:
+            tokens = self.model.frame_tokens(frame, language)  # only the new frame goes through the CNN
+            self._push(self._tokens, tokens)
+            window = torch.stack(list(self._tokens), dim=1)  # (B, T, N, token_dim)
+        else:
+            self._push(self._frames, frame)
+            stacked = {k: torch.stack([f[k] for f in self._frames], dim=1) for k in self.camera_keys}
+            b, t = stacked[self.camera_keys[0]].shape[:2]
+            tokens = self.model.frame_tokens(
+                {k: v.flatten(0, 1) for k, v in stacked.items()}, language.repeat_interleave(t, dim=0)
+            )
+            window = tokens.view(b, t, *tokens.shape[1:])
+        logits = self.model.transformer(window)[:, -1]  # (B, A, V)
+        return self.action_tokenizer.detokenize(logits.argmax(-1))
+
+    def _push(self, queue: deque, item) -> None:
+        # Like LeRobot's delta-timestamp padding in training: an episode's first frame fills the window.
+        if not queue:
+            queue.extend([item] * self.config.n_obs_steps)
+        else:
+            queue.append(item)
