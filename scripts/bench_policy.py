@@ -1,0 +1,303 @@
+"""RT-1 policy cost per preset: parameters, training throughput, and ``select_action`` latency with and
+without token reuse.
+
+What is measured
+    For each preset of ``RT1Config`` (``rt1``, ``lite0``, ``small``; see ``configuration_rt1.py``) one
+    ``RT1Policy`` is built without a dataset: one camera ``observation.images.front`` of 3x84x84 (the
+    Factor World default; each preset resizes it to its own ``image_size``), a 4-D action, a 384-D
+    sentence embedding (MiniLM-L6). Inputs are random tensors already on the device (no data loading,
+    no host-to-device copy), so only the model's own cost is timed.
+
+    * ``params (M)``: every parameter of the policy, in millions.
+    * ``train samples/s``: windows of ``n_obs_steps`` (6) frames per second through one full training
+      step = ``policy.forward(batch)`` (in ``train()`` mode: crop and photometric augmentation, dropout)
+      + ``loss.backward()`` + ``torch.optim.AdamW(policy.parameters(), lr=cfg.optimizer_lr).step()``
+      (``zero_grad(set_to_none=True)`` first). The batch size is per preset and device (below).
+    * ``select_action ms``: wall time of one ``policy.select_action(batch)`` call, i.e. one control step
+      with one new frame (batch of 1), median over the timed calls. With ``token_reuse`` ON only the new
+      frame goes through the FiLM-EfficientNet + TokenLearner and the window's earlier tokens are reused;
+      OFF re-tokenizes the whole 6-frame window every call. Both run on the same policy (the flag is
+      flipped on ``policy.config``); each measurement starts with ``policy.reset()`` and ``--warmup``
+      untimed calls (>= 6, so the window holds real history), then times ``--infer-steps`` calls, each on a
+      different frame. ``speedup`` = latency OFF / latency ON.
+
+    The machine is noisy, so each preset's measurements run in ``--rounds`` interleaved rounds: every
+    round times one training segment and one ON and one OFF inference segment, the ON/OFF order
+    alternating between rounds (ON OFF, OFF ON, ...). Training reports the median of the per-round rates;
+    latency the median over all timed calls of that mode. On CUDA every timed region ends with
+    ``torch.cuda.synchronize()``. ``torch.set_num_threads`` is left at PyTorch's default.
+
+    Batch sizes (training), CPU / CUDA: small 16 / 128, lite0 8 / 64, rt1 2 / 16 (``--batch-size`` overrides
+    all). The ``rt1`` preset (FiLM-EfficientNet-B3 at 300 px, ~34M params) is slow on CPU, so it gets a
+    small batch and few iterations; ``--skip-slow`` drops it.
+
+    python scripts/bench_policy.py [--presets small,lite0,rt1] [--skip-slow] [--device cpu|cuda]
+                                   [--rounds 3] [--train-steps N] [--infer-steps N] [--batch-size N] [--quick]
+
+``--quick`` is a smoke run (small preset only, 1 round, a few iterations). The last line printed is exactly
+``ratio: <float>`` = the token-reuse speedup (latency OFF / latency ON) of the ``small`` preset, or of the
+first preset measured when ``small`` is not selected.
+"""
+
+from __future__ import annotations
+
+import argparse
+import statistics
+import sys
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import torch
+from tqdm import tqdm
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
+from lerobot.configs import FeatureType, PolicyFeature  # noqa: E402
+
+from lerobot_factorworld.policies.rt1.configuration_rt1 import LANGUAGE_EMBEDDING_KEY, PRESETS, RT1Config  # noqa: E402
+from lerobot_factorworld.policies.rt1.modeling_rt1 import RT1Policy  # noqa: E402
+
+IMAGE_KEY = "observation.images.front"
+IMAGE_SHAPE = (3, 84, 84)
+ACTION_DIM = 4
+LANGUAGE_DIM = 384
+FRAME_POOL = 16  # distinct inference frames cycled through (so no call sees the same input twice in a row)
+SLOW_PRESETS = ("rt1",)
+DEFAULT_ORDER = ("small", "lite0", "rt1")
+
+
+@dataclass(frozen=True)
+class Plan:
+    """Per-preset workload: training batch size and timed iterations per round, per device type."""
+
+    batch: dict[str, int]
+    train_steps: dict[str, int]  # timed training steps per round
+    infer_steps: dict[str, int]  # timed select_action calls per round and mode
+
+
+PLANS: dict[str, Plan] = {
+    "small": Plan({"cpu": 16, "cuda": 128}, {"cpu": 8, "cuda": 20}, {"cpu": 40, "cuda": 100}),
+    "lite0": Plan({"cpu": 8, "cuda": 64}, {"cpu": 4, "cuda": 20}, {"cpu": 20, "cuda": 100}),
+    "rt1": Plan({"cpu": 2, "cuda": 16}, {"cpu": 2, "cuda": 10}, {"cpu": 6, "cuda": 60}),
+}
+QUICK = dict(rounds=1, batch=4, train_steps=2, infer_steps=8, warmup=6)
+
+
+@dataclass
+class Result:
+    preset: str
+    params_m: float
+    image_size: int
+    batch: int
+    train_rates: list[float] = field(default_factory=list)  # samples/s per round
+    latency_ms: dict[bool, list[float]] = field(default_factory=lambda: {True: [], False: []})  # per call
+
+    @property
+    def train_rate(self) -> float:
+        return statistics.median(self.train_rates)
+
+    def latency(self, reuse: bool) -> float:
+        return statistics.median(self.latency_ms[reuse])
+
+    @property
+    def speedup(self) -> float:
+        return self.latency(False) / self.latency(True)
+
+
+def build_policy(preset: str, device: str) -> RT1Policy:
+    cfg = RT1Config(
+        preset=preset,
+        device=device,
+        input_features={IMAGE_KEY: PolicyFeature(FeatureType.VISUAL, IMAGE_SHAPE)},
+        output_features={"action": PolicyFeature(FeatureType.ACTION, (ACTION_DIM,))},
+    )
+    return RT1Policy(cfg).to(device)
+
+
+def sync(device: str) -> None:
+    if device.startswith("cuda"):
+        torch.cuda.synchronize(device)
+
+
+def train_batch(policy: RT1Policy, batch_size: int, device: str) -> dict[str, torch.Tensor]:
+    t = policy.config.n_obs_steps
+    return {
+        IMAGE_KEY: torch.rand(batch_size, t, *IMAGE_SHAPE, device=device),
+        LANGUAGE_EMBEDDING_KEY: torch.randn(batch_size, LANGUAGE_DIM, device=device),
+        "action": torch.rand(batch_size, t, ACTION_DIM, device=device) * 2 - 1,
+        "action_is_pad": torch.zeros(batch_size, t, dtype=torch.bool, device=device),
+    }
+
+
+def train_step(policy: RT1Policy, optimizer: torch.optim.Optimizer, batch: dict[str, torch.Tensor]) -> None:
+    optimizer.zero_grad(set_to_none=True)
+    loss, _ = policy.forward(batch)
+    loss.backward()
+    optimizer.step()
+
+
+def time_training(policy, optimizer, batch, steps: int, device: str, bar: tqdm) -> float:
+    """Seconds for ``steps`` training steps (summed per step, so the progress bar is not timed)."""
+    policy.train()  # select_action switches the policy to eval()
+    total = 0.0
+    for _ in range(steps):
+        sync(device)
+        t0 = time.perf_counter()
+        train_step(policy, optimizer, batch)
+        sync(device)
+        total += time.perf_counter() - t0
+        bar.update(1)
+    return total
+
+
+def time_inference(policy, frames, language, reuse: bool, warmup: int, steps: int, device: str, bar) -> list[float]:
+    """Per-call ``select_action`` latencies (ms) for ``steps`` calls after ``reset()`` and ``warmup`` calls."""
+    policy.config.token_reuse = reuse
+    policy.reset()
+    for i in range(warmup):
+        policy.select_action({IMAGE_KEY: frames[i % len(frames)], LANGUAGE_EMBEDDING_KEY: language})
+        bar.update(1)
+    sync(device)
+    latencies = []
+    for i in range(warmup, warmup + steps):
+        batch = {IMAGE_KEY: frames[i % len(frames)], LANGUAGE_EMBEDDING_KEY: language}
+        t0 = time.perf_counter()
+        action = policy.select_action(batch)
+        sync(device)
+        latencies.append((time.perf_counter() - t0) * 1000.0)
+        assert action.shape == (1, ACTION_DIM), action.shape
+        bar.update(1)
+    return latencies
+
+
+def workload(preset: str, args: argparse.Namespace, kind: str) -> tuple[int, int, int]:
+    """(batch size, timed training steps per round, timed select_action calls per round and mode)."""
+    if args.quick:
+        return QUICK["batch"], QUICK["train_steps"], QUICK["infer_steps"]
+    plan = PLANS[preset]
+    return (
+        args.batch_size or plan.batch[kind],
+        args.train_steps or plan.train_steps[kind],
+        args.infer_steps or plan.infer_steps[kind],
+    )
+
+
+def bench_preset(preset: str, args: argparse.Namespace, bar: tqdm) -> Result:
+    device, kind = args.device, "cuda" if args.device.startswith("cuda") else "cpu"
+    batch_size, train_steps, infer_steps = workload(preset, args, kind)
+    torch.manual_seed(args.seed)
+    bar.set_postfix_str(f"{preset}: building")
+    policy = build_policy(preset, device)
+    cfg = policy.config
+    result = Result(preset, sum(p.numel() for p in policy.parameters()) / 1e6, cfg.image_size, batch_size)
+
+    optimizer = torch.optim.AdamW(policy.parameters(), lr=cfg.optimizer_lr)
+    batch = train_batch(policy, batch_size, device)
+    frames = [torch.rand(1, *IMAGE_SHAPE, device=device) for _ in range(FRAME_POOL)]
+    language = torch.randn(1, LANGUAGE_DIM, device=device)
+
+    # Warm-up (untimed): first passes allocate memory / pick kernels; the optimizer creates its state.
+    bar.set_postfix_str(f"{preset}: warm-up")
+    time_training(policy, optimizer, batch, 1, device, bar)
+    for r in range(args.rounds):
+        tag = f"{preset} round {r + 1}/{args.rounds}"
+        bar.set_postfix_str(f"{tag} train")
+        seconds = time_training(policy, optimizer, batch, train_steps, device, bar)
+        result.train_rates.append(batch_size * train_steps / seconds)
+        for reuse in (True, False) if r % 2 == 0 else (False, True):
+            bar.set_postfix_str(f"{tag} reuse {'ON' if reuse else 'OFF'}")
+            result.latency_ms[reuse] += time_inference(
+                policy, frames, language, reuse, args.warmup, infer_steps, device, bar
+            )
+    policy.config.token_reuse = True
+    del policy, optimizer, batch
+    if kind == "cuda":
+        torch.cuda.empty_cache()
+    return result
+
+
+def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--presets", default=",".join(DEFAULT_ORDER), help="comma-separated presets, in order")
+    parser.add_argument("--skip-slow", action="store_true", help=f"drop the slow preset(s): {', '.join(SLOW_PRESETS)}")
+    parser.add_argument("--device", default="cuda" if torch.cuda.is_available() else "cpu", help="cpu or cuda")
+    parser.add_argument("--rounds", type=int, default=3, help="interleaved rounds per preset")
+    parser.add_argument("--train-steps", type=int, default=0, help="timed training steps per round (0: per preset)")
+    parser.add_argument("--infer-steps", type=int, default=0, help="timed select_action calls per round and mode")
+    parser.add_argument(
+        "--batch-size", type=int, default=0, help="training batch size for every preset (0: per preset)"
+    )
+    parser.add_argument("--warmup", type=int, default=8, help="untimed select_action calls after each reset (>= 6)")
+    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--quick", action="store_true", help="smoke run: small preset, 1 round, few iterations")
+    args = parser.parse_args(argv)
+
+    presets = [p.strip() for p in args.presets.split(",") if p.strip()]
+    unknown = [p for p in presets if p not in PRESETS]
+    if unknown:
+        parser.error(f"unknown preset(s) {', '.join(unknown)}; valid: {', '.join(PRESETS)}")
+    if args.quick:
+        presets = ["small"]
+        args.rounds, args.warmup = QUICK["rounds"], QUICK["warmup"]
+    if args.skip_slow:
+        presets = [p for p in presets if p not in SLOW_PRESETS]
+    if not presets:
+        parser.error("no preset left to measure")
+    args.preset_list = list(dict.fromkeys(presets))
+    if min(args.rounds, args.warmup) < 1 or min(args.train_steps, args.infer_steps, args.batch_size) < 0:
+        parser.error("--rounds and --warmup must be >= 1; step counts and batch size >= 0")
+    if args.device.startswith("cuda") and not torch.cuda.is_available():
+        parser.error("--device cuda requested but CUDA is not available")
+    return args
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = parse_args(argv)
+    kind = "cuda" if args.device.startswith("cuda") else "cpu"
+    device_name = torch.cuda.get_device_name(args.device) if kind == "cuda" else "cpu"
+    print(
+        f"RT-1 presets {', '.join(args.preset_list)} on {args.device} ({device_name}, "
+        f"torch {torch.__version__}, {torch.get_num_threads()} threads), {args.rounds} round(s)",
+        flush=True,
+    )
+
+    total = 0
+    for preset in args.preset_list:
+        _, train_steps, infer_steps = workload(preset, args, kind)
+        total += 1 + args.rounds * (train_steps + 2 * (args.warmup + infer_steps))
+    results: list[Result] = []
+    with tqdm(total=total, desc="policy steps", unit="step", file=sys.stderr) as bar:
+        for preset in args.preset_list:
+            results.append(bench_preset(preset, args, bar))
+
+    print()
+    header = (
+        f"| {'preset':<7} | {'params (M)':>10} | {'img px':>6} | {'batch':>5} | {'train samples/s':>15} "
+        f"| {'ms/train step':>13} | {'select_action ON ms':>19} | {'OFF ms':>8} | {'speedup OFF/ON':>14} |"
+    )
+    print(header)
+    print("|" + "|".join("-" * (len(cell)) for cell in header.split("|")[1:-1]) + "|")
+    for res in results:
+        print(
+            f"| {res.preset:<7} | {res.params_m:>10.2f} | {res.image_size:>6} | {res.batch:>5} "
+            f"| {res.train_rate:>15.1f} | {1000.0 * res.batch / res.train_rate:>13.1f} "
+            f"| {res.latency(True):>19.2f} | {res.latency(False):>8.2f} | {res.speedup:>13.2f}x |"
+        )
+    print()
+    for res in results:
+        _, train_steps, infer_steps = workload(res.preset, args, kind)
+        rates = ", ".join(f"{rate:.1f}" for rate in res.train_rates)
+        print(
+            f"{res.preset}: train samples/s per round [{rates}] ({train_steps} steps each); "
+            f"select_action {len(res.latency_ms[True])} timed calls per mode ({infer_steps} per round, "
+            f"{args.warmup} warm-up after each reset)"
+        )
+    headline = next((res for res in results if res.preset == "small"), results[0])
+    print(f"token-reuse speedup of {headline.preset}: {headline.speedup:.2f}x (select_action latency OFF / ON)")
+    print(f"ratio: {headline.speedup:.4f}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

