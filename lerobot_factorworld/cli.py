@@ -7,6 +7,7 @@ Commands:
     sample          sample N environment configurations and save them as JSON
     contact-sheet   render a task under every factor (PNG)
     collect         scripted demos -> LeRobotDataset with per-episode factor values (resumable)
+    rt1-presets     the RT-1 presets and their parameter counts
 """
 
 from __future__ import annotations
@@ -100,6 +101,12 @@ def cmd_collect(args: list[str]) -> None:
         print(f"  {env}: {count} failed attempt(s) discarded")
 
 
+def cmd_rt1_presets(_: list[str]) -> None:
+    from .policies.rt1.presets import preset_table
+
+    print(preset_table())
+
+
 COMMANDS: dict[str, Callable[[list[str]], None]] = {
     "tasks": cmd_tasks,
     "factors": cmd_factors,
@@ -107,6 +114,7 @@ COMMANDS: dict[str, Callable[[list[str]], None]] = {
     "sample": cmd_sample,
     "contact-sheet": cmd_contact_sheet,
     "collect": cmd_collect,
+    "rt1-presets": cmd_rt1_presets,
 }
 
 

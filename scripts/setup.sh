@@ -17,7 +17,9 @@ fi
 "$PYTHON" -m uv --version >/dev/null 2>&1 || "$PYTHON" -m pip install --quiet uv
 export UV_PYTHON_DOWNLOADS=never  # uv must use this interpreter, it cannot download one
 [ -x .venv/bin/python ] || "$PYTHON" -m uv venv --quiet .venv -p "$PYTHON"
-"$PYTHON" -m uv pip install --quiet -p .venv/bin/python -e ".[dev]"
+# --compile-bytecode: some machines set PYTHONDONTWRITEBYTECODE, and then every process would recompile
+# torch, transformers and LeRobot from source (~10 s per import of LeRobot).
+"$PYTHON" -m uv pip install --quiet --compile-bytecode -p .venv/bin/python -e ".[dev]"
 
 # FFmpeg shared libraries let torchcodec load (otherwise every process prints a long traceback).
 if ! ldconfig -p 2>/dev/null | grep -q libavcodec; then

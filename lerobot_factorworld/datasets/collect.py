@@ -212,8 +212,7 @@ def collect(cfg: CollectConfig) -> CollectReport:
                         break
                     bar.update(len(job.demo_indices))
             else:
-                context = get_context("forkserver")
-                with ProcessPoolExecutor(workers, mp_context=context, initializer=_worker_init) as pool:
+                with ProcessPoolExecutor(workers, mp_context=_worker_context(), initializer=_worker_init) as pool:
                     futures = {pool.submit(run_job, job, settings, str(parts)): job for job in todo}
                     for future in as_completed(futures):
                         job = futures[future]
@@ -235,6 +234,17 @@ def collect(cfg: CollectConfig) -> CollectReport:
 
         push_dataset(root, cfg.repo_id, private=cfg.private)
     return CollectReport(root, episodes, frames, failures, time.perf_counter() - start)
+
+
+WORKER_PRELOAD = ["lerobot_factorworld.datasets.worker_preload"]
+
+
+def _worker_context():
+    """forkserver workers (no inherited GL or torch thread state) that fork from a server which has
+    already imported LeRobot and MuJoCo once, instead of paying that import in every worker."""
+    context = get_context("forkserver")
+    context.set_forkserver_preload(WORKER_PRELOAD)
+    return context
 
 
 def _worker_init() -> None:
