@@ -27,3 +27,5 @@ lint: setup
 
 bench: setup
 	$(BIN)/python scripts/bench_env.py
+	$(BIN)/python scripts/bench_collect.py
+	$(BIN)/python scripts/bench_policy.py

@@ -42,6 +42,7 @@ first preset measured when ``small`` is not selected.
 from __future__ import annotations
 
 import argparse
+import os
 import statistics
 import sys
 import time
@@ -266,6 +267,7 @@ def main(argv: list[str] | None = None) -> int:
     for preset in args.preset_list:
         _, train_steps, infer_steps = workload(preset, args, kind)
         total += 1 + args.rounds * (train_steps + 2 * (args.warmup + infer_steps))
+    load_start = os.getloadavg()
     results: list[Result] = []
     with tqdm(total=total, desc="policy steps", unit="step", file=sys.stderr) as bar:
         for preset in args.preset_list:
@@ -293,6 +295,11 @@ def main(argv: list[str] | None = None) -> int:
             f"select_action {len(res.latency_ms[True])} timed calls per mode ({infer_steps} per round, "
             f"{args.warmup} warm-up after each reset)"
         )
+    load_end = os.getloadavg()
+    print(
+        f"load average (1/5/15 min) at start {'/'.join(f'{x:.2f}' for x in load_start)}, at end "
+        f"{'/'.join(f'{x:.2f}' for x in load_end)} on {os.cpu_count()} CPUs (other work skews the numbers)"
+    )
     headline = next((res for res in results if res.preset == "small"), results[0])
     print(f"token-reuse speedup of {headline.preset}: {headline.speedup:.2f}x (select_action latency OFF / ON)")
     print(f"ratio: {headline.speedup:.4f}")
