@@ -22,6 +22,7 @@ from typing import Any
 import numpy as np
 
 from ..factors.registry import PAPER_STUDY_FACTORS
+from ..factors.sampling import SamplingOptions
 
 MODES = ("new", "overwrite", "append")
 PLAN_FILE = "plan.json"
@@ -59,7 +60,7 @@ class CollectConfig:
             ``overwrite`` (deletes what is at ``root``), ``append`` (adds these demos to it).
         push_to_hub: Push with LeRobot's mechanism (card, tags) when done.
         private: Push as a private dataset.
-        widths / texture_folder / shape_folder / rgb_fraction / n_distractors: see ``SamplingOptions``.
+        sampling: How factor values are drawn (``--sampling.n_distractors=2``, ``--sampling.texture_folder=...``).
     """
 
     task: str = "pick-place"
@@ -84,11 +85,7 @@ class CollectConfig:
     mode: str = "new"
     push_to_hub: bool = False
     private: bool = False
-    widths: dict[str, str] = field(default_factory=dict)
-    texture_folder: str | None = None
-    shape_folder: str | None = None
-    rgb_fraction: float = 0.0
-    n_distractors: int = 1
+    sampling: SamplingOptions = field(default_factory=SamplingOptions)
 
     def __post_init__(self) -> None:
         from ..scene.cameras import check_camera_names
@@ -143,18 +140,11 @@ class CollectReport:
 
 def plan_jobs(cfg: CollectConfig) -> list[Job]:
     """Every job of the collection, in a deterministic order."""
-    from ..factors.sampling import SamplingOptions, sample_configs
+    from ..factors.sampling import sample_configs
 
-    options = SamplingOptions(
-        widths=dict(cfg.widths),
-        texture_folder=cfg.texture_folder,
-        shape_folder=cfg.shape_folder,
-        rgb_fraction=cfg.rgb_fraction,
-        n_distractors=cfg.n_distractors,
-    )
     jobs = []
     for task_index, task in enumerate(cfg.task_names):
-        configs = sample_configs(task, cfg.n_envs, cfg.seed, cfg.split, cfg.factors, options)
+        configs = sample_configs(task, cfg.n_envs, cfg.seed, cfg.split, cfg.factors, cfg.sampling)
         for env_index, config in enumerate(configs):
             if cfg.demos_per_env is not None:
                 count = cfg.demos_per_env
@@ -301,7 +291,7 @@ def run_job(job: Job, settings: dict, parts_dir: str) -> dict:
     from ..factors.values import SceneConfig
     from .schema import ENV_ID_COLUMN, SPLIT_COLUMN, encode_factors, frame_features
 
-    cfg = CollectConfig(**settings)
+    cfg = CollectConfig(**{**settings, "sampling": SamplingOptions(**settings["sampling"])})
     parts = Path(parts_dir)
     tmp, final = parts / f"{job.job_id}.tmp", parts / job.job_id
     if tmp.exists():

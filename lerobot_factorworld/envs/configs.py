@@ -16,6 +16,7 @@ from lerobot.envs.configs import EnvConfig
 from lerobot.utils.constants import ACTION, OBS_IMAGES, OBS_STATE
 
 from ..factors.registry import PAPER_STUDY_FACTORS
+from ..factors.sampling import SamplingOptions
 from ..tasks import get_task
 from .factor_env import CONTROL_FPS, FactorWorldEnv
 
@@ -43,7 +44,7 @@ class FactorWorldEnvConfig(EnvConfig):
         include_train: Also evaluate on the training environments (needed for the generalization gap).
         configs_path: JSON file of training configurations (``factorworld sample`` writes one) to use
             instead of sampling them.
-        widths / texture_folder / shape_folder / rgb_fraction / n_distractors: see ``SamplingOptions``.
+        sampling: How factor values are drawn (``--env.sampling.widths='{camera_pos: wide}'``, ...).
     """
 
     task: str = "pick-place"
@@ -59,11 +60,7 @@ class FactorWorldEnvConfig(EnvConfig):
     seed: int = 0
     include_train: bool = True
     configs_path: str | None = None
-    widths: dict[str, str] = field(default_factory=dict)
-    texture_folder: str | None = None
-    shape_folder: str | None = None
-    rgb_fraction: float = 0.0
-    n_distractors: int = 1
+    sampling: SamplingOptions = field(default_factory=SamplingOptions)
     features: dict[str, PolicyFeature] = field(default_factory=dict)
     features_map: dict[str, str] = field(default_factory=dict)
 
@@ -104,17 +101,9 @@ class FactorWorldEnvConfig(EnvConfig):
 
     def suites(self, task: str) -> dict:
         """Evaluation conditions -> scene configurations for ``task``."""
-        from ..factors.sampling import SamplingOptions
         from ..factors.values import load_configs
         from ..study.plan import TRAIN_SUITE, evaluation_suites
 
-        options = SamplingOptions(
-            widths=dict(self.widths),
-            texture_folder=self.texture_folder,
-            shape_folder=self.shape_folder,
-            rgb_fraction=self.rgb_fraction,
-            n_distractors=self.n_distractors,
-        )
         train_configs = None
         if self.configs_path:
             train_configs = [c for c in load_configs(self.configs_path) if c.task == get_task(task).name]
@@ -127,7 +116,7 @@ class FactorWorldEnvConfig(EnvConfig):
             self.shifts,
             self.n_test_envs,
             self.seed,
-            options,
+            self.sampling,
             train_configs,
         )
         if not self.include_train:
