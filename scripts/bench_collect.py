@@ -27,7 +27,7 @@ What is measured
     far too fast; see ``scripts/bench_env.py``). The naive loop checks that its frames are not blank. With
     ``--rounds N`` the modes are run N times, in alternating order, and the median frames/s per mode is reported.
 
-    python scripts/bench_collect.py [--task pick-place] [--demos 8] [--rounds 1] [--seed 0] [--quick] [--keep]
+    python scripts/bench_collect.py [--task pick-place] [--demos 40] [--rounds 1] [--seed 0] [--quick] [--keep]
 
 The last line printed is exactly ``ratio: <float>`` = Factor World (all workers) frames/s / Meta-World naive
 frames/s (target: >= 10).
@@ -228,7 +228,7 @@ def run_mode(mode: str, args: argparse.Namespace, out_dir: Path, round_index: in
 def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--task", default="pick-place", help="task name, e.g. pick-place")
-    parser.add_argument("--demos", type=int, default=8, help="successful demos per mode (D)")
+    parser.add_argument("--demos", type=int, default=40, help="successful demos per mode (D)")
     parser.add_argument("--rounds", type=int, default=1, help="runs of every mode (median frames/s over rounds)")
     parser.add_argument("--seed", type=int, default=0, help="collection seed (environments and episodes)")
     parser.add_argument("--quick", action="store_true", help="fast smoke run: --demos 2 --rounds 1")

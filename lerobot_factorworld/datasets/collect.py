@@ -29,7 +29,7 @@ PLAN_FILE = "plan.json"
 JOB_RESULT_FILE = "factorworld_job.json"
 SIDECAR = "meta/factorworld.json"
 # Settings that do not change what gets collected (so they may differ on resume).
-RUN_ONLY_SETTINGS = ("workers", "mode", "push_to_hub", "private", "episodes_per_shard")
+RUN_ONLY_SETTINGS = ("workers", "mode", "push_to_hub", "private", "episodes_per_shard", "start_method")
 
 
 @dataclass
@@ -56,6 +56,8 @@ class CollectConfig:
         repo_id: Dataset id (``user/name``), used by LeRobot and for the Hub.
         workers: Worker processes (0: all cores).
         episodes_per_shard: Demos per job; a crash loses at most one job per worker.
+        start_method: How workers start: ``auto`` (``fork`` when this process has no GL context, else
+            ``forkserver``), or ``fork`` / ``forkserver`` / ``spawn``.
         mode: ``new`` (refuses to touch a different existing dataset; resumes an identical one),
             ``overwrite`` (deletes what is at ``root``), ``append`` (adds these demos to it).
         push_to_hub: Push with LeRobot's mechanism (card, tags) when done.
@@ -81,7 +83,8 @@ class CollectConfig:
     root: str = "outputs/datasets/factorworld_pick-place"
     repo_id: str = "local/factorworld_pick-place"
     workers: int = 0
-    episodes_per_shard: int = 10
+    episodes_per_shard: int = 20
+    start_method: str = "auto"
     mode: str = "new"
     push_to_hub: bool = False
     private: bool = False
@@ -94,6 +97,8 @@ class CollectConfig:
         for task in self.task_names:
             get_task(task)
         check_camera_names(self.camera_names)
+        if self.start_method not in START_METHODS:
+            raise ValueError(f"unknown start_method {self.start_method!r}; valid: {', '.join(START_METHODS)}")
         if self.mode not in MODES:
             raise ValueError(f"unknown mode {self.mode!r}; valid modes: {', '.join(MODES)}")
         if self.n_envs < 1 or (self.demos_per_env or self.demos) < 1:
@@ -202,7 +207,8 @@ def collect(cfg: CollectConfig) -> CollectReport:
                         break
                     bar.update(len(job.demo_indices))
             else:
-                with ProcessPoolExecutor(workers, mp_context=_worker_context(), initializer=_worker_init) as pool:
+                context = _worker_context(cfg.start_method)
+                with ProcessPoolExecutor(workers, mp_context=context, initializer=_worker_init) as pool:
                     futures = {pool.submit(run_job, job, settings, str(parts)): job for job in todo}
                     for future in as_completed(futures):
                         job = futures[future]
@@ -226,14 +232,26 @@ def collect(cfg: CollectConfig) -> CollectReport:
     return CollectReport(root, episodes, frames, failures, time.perf_counter() - start)
 
 
-WORKER_PRELOAD = ["lerobot_factorworld.datasets.worker_preload"]
+WORKER_PRELOAD = "lerobot_factorworld.datasets.worker_preload"
+START_METHODS = ("auto", "fork", "forkserver", "spawn")
 
 
-def _worker_context():
-    """forkserver workers (no inherited GL or torch thread state) that fork from a server which has
-    already imported LeRobot and MuJoCo once, instead of paying that import in every worker."""
-    context = get_context("forkserver")
-    context.set_forkserver_preload(WORKER_PRELOAD)
+def _worker_context(start_method: str):
+    """How worker processes start. ``auto``: ``fork`` on Linux when this process holds no GL context
+    (workers then inherit LeRobot and MuJoCo already imported: no per-worker import, seconds each),
+    else ``forkserver`` preloaded with those modules (safe with GL contexts and torch threads)."""
+    import importlib
+    import sys
+
+    from ..envs import factor_env
+
+    if start_method == "auto":
+        start_method = "fork" if sys.platform == "linux" and not factor_env.gl_context_created() else "forkserver"
+    context = get_context(start_method)
+    if start_method == "forkserver":
+        context.set_forkserver_preload([WORKER_PRELOAD])
+    elif start_method == "fork":
+        importlib.import_module(WORKER_PRELOAD)  # imported once here, inherited by every worker
     return context
 
 

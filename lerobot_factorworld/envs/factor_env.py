@@ -51,6 +51,14 @@ OPTIONS = ("config", "env_index", "factors")
 CONTROL_FPS = 80  # Meta-World: timestep 0.0025 s x frame_skip 5 = 12.5 ms per env step
 
 
+_GL_CONTEXTS_CREATED = False
+
+
+def gl_context_created() -> bool:
+    """Whether this process has created a MuJoCo render context (forking it would share GL state)."""
+    return _GL_CONTEXTS_CREATED
+
+
 class FactorWorldEnv(gym.Env):
     metadata = {"render_modes": ["rgb_array"], "render_fps": CONTROL_FPS}
 
@@ -263,8 +271,10 @@ class _Scene:
         import mujoco
 
         if self._renderer is None:
+            global _GL_CONTEXTS_CREATED
             h, w = self.image_size
             self._renderer = mujoco.Renderer(self.model, height=h, width=w)
+            _GL_CONTEXTS_CREATED = True
         frames = {}
         for cam in self.cameras:
             self._renderer.update_scene(self.env.data, camera=cam)
