@@ -14,12 +14,10 @@ def card_tags(settings: dict) -> list[str]:
     return ["factorworld", "meta-world", *tasks, *settings["factors"]]
 
 
-def card_description(root: Path) -> str:
-    from lerobot.datasets.lerobot_dataset import LeRobotDatasetMetadata
-
-    sidecar = json.loads((root / "meta" / "factorworld.json").read_text())
+def card_description(meta) -> str:
+    """Markdown summary of a collected dataset (``meta``: its ``LeRobotDatasetMetadata``)."""
+    sidecar = json.loads((Path(meta.root) / "meta" / "factorworld.json").read_text())
     settings = sidecar["settings"]
-    meta = LeRobotDatasetMetadata("local/card", root=root)
     episodes = meta.episodes
     per_env = Counter(episodes[ENV_ID_COLUMN])
     splits = Counter(episodes[SPLIT_COLUMN])

@@ -442,7 +442,7 @@ def _merge(cfg: CollectConfig, root: Path, parts: Path, jobs: list[Job], results
     meta = LeRobotDatasetMetadata(cfg.repo_id, root=root)
     from .card import write_card
 
-    write_card(root, cfg.repo_id)
+    write_card(meta)
     return meta.total_episodes, meta.total_frames
 
 

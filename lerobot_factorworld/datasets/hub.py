@@ -20,7 +20,10 @@ def push_dataset(root: str | Path, repo_id: str, private: bool = False) -> None:
     dataset = LeRobotDataset(repo_id, root=root)
     try:
         dataset.push_to_hub(
-            tags=card_tags(settings), private=private, license="apache-2.0", dataset_description=card_description(root)
+            tags=card_tags(settings),
+            private=private,
+            license="apache-2.0",
+            dataset_description=card_description(dataset.meta),
         )
     except Exception as err:  # requests/httpx/huggingface_hub errors all mean the same thing here
         if _is_network_error(err):
