@@ -44,19 +44,18 @@ def card_description(meta) -> str:
     return "\n".join(lines)
 
 
-def write_card(root: Path, repo_id: str) -> Path:
+def write_card(meta) -> Path:
     """Write ``README.md`` (the card) into the dataset folder; push_to_hub sends the same card."""
-    from lerobot.datasets.lerobot_dataset import LeRobotDatasetMetadata
     from lerobot.datasets.utils import create_lerobot_dataset_card
 
+    root = Path(meta.root)
     sidecar = json.loads((root / "meta" / "factorworld.json").read_text())
-    meta = LeRobotDatasetMetadata(repo_id, root=root)
     card = create_lerobot_dataset_card(
         tags=card_tags(sidecar["settings"]),
         dataset_info=meta.info,
         license="apache-2.0",
-        repo_id=repo_id,
-        dataset_description=card_description(root),
+        repo_id=meta.repo_id,
+        dataset_description=card_description(meta),
     )
     path = root / "README.md"
     path.write_text(str(card))
