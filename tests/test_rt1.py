@@ -260,3 +260,17 @@ def test_lerobot_train_lowers_the_loss_and_lerobot_eval_runs_the_checkpoint(tiny
     )
     assert evaluate.returncode == 0, evaluate.stderr[-3000:]
     assert (tmp_path / "eval" / "eval_info.json").is_file()
+
+
+def test_per_sample_loss_matches_the_mean_loss():
+    policy = make_policy(dropout=0.0)
+    policy.eval()  # no augmentation, so both calls see the same inputs
+    batch = {
+        CAMERA: torch.rand(3, 6, 3, 84, 84),
+        LANGUAGE_EMBEDDING_KEY: torch.randn(3, 384),
+        "action": torch.rand(3, 6, 4) * 2 - 1,
+        "action_is_pad": torch.zeros(3, 6, dtype=torch.bool),
+    }
+    mean, _ = policy(batch)
+    per_sample, _ = policy(batch, reduction="none")
+    assert per_sample.shape == (3,) and torch.allclose(per_sample.mean(), mean, atol=1e-5)

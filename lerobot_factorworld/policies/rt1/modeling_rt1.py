@@ -152,13 +152,10 @@ class RT1Policy(PreTrainedPolicy):
         logits = self.model(images, batch[LANGUAGE_EMBEDDING_KEY])  # (B, T, A, V)
         actions = batch[ACTION]  # (B, T, A), min-max normalised to [-1, 1]
         valid = ~batch["action_is_pad"] if "action_is_pad" in batch else None
-        loss = self.action_tokenizer.loss(logits, actions, valid)
+        loss = self.action_tokenizer.loss(logits, actions, valid, per_sample=reduction == "none")
         with torch.no_grad():
             hits = (logits.argmax(-1) == self.action_tokenizer.tokenize(actions)).float()
             accuracy = (hits.mean(-1)[valid] if valid is not None else hits).mean().item()
-        if reduction == "none":
-            per_sample = self.action_tokenizer.loss(logits, actions, valid)  # scalar: LeRobot only needs mean
-            return per_sample.expand(actions.shape[0]), {"token_accuracy": accuracy}
         return loss, {"token_accuracy": accuracy}
 
     @torch.no_grad()

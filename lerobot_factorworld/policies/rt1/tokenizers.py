@@ -43,11 +43,16 @@ class ActionTokenizer:
     def detokenize(self, tokens: Tensor) -> Tensor:
         return self.low + (tokens.float() + 0.5) * self.width
 
-    def loss(self, logits: Tensor, actions: Tensor, mask: Tensor | None = None) -> Tensor:
-        """Cross-entropy of logits (..., A, bins) against the tokens of actions (..., A)."""
+    def loss(self, logits: Tensor, actions: Tensor, mask: Tensor | None = None, per_sample: bool = False) -> Tensor:
+        """Cross-entropy of logits (B, ..., A, bins) against the tokens of actions (B, ..., A).
+
+        ``mask`` (B, ...) marks the steps that count (LeRobot pads windows at episode starts). Returns the
+        mean over counted tokens, or with ``per_sample`` one mean per batch element (B,).
+        """
         targets = self.tokenize(actions)
         loss = F.cross_entropy(logits.flatten(0, -2), targets.flatten(), reduction="none").view_as(targets)
-        if mask is None:
-            return loss.mean()
-        mask = mask.unsqueeze(-1).expand_as(loss).float()
-        return (loss * mask).sum() / mask.sum().clamp_min(1.0)
+        weight = torch.ones_like(loss) if mask is None else mask.unsqueeze(-1).expand_as(loss).float()
+        if per_sample:
+            dims = tuple(range(1, loss.ndim))
+            return (loss * weight).sum(dims) / weight.sum(dims).clamp_min(1.0)
+        return (loss * weight).sum() / weight.sum().clamp_min(1.0)
