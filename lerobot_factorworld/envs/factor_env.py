@@ -40,7 +40,7 @@ import gymnasium as gym
 import numpy as np
 
 from ..factors.registry import FACTORS, factor_range
-from ..factors.values import FactorValues, SceneConfig
+from ..factors.values import FactorValues, SceneConfig, to_jsonable
 from ..scene.build import DEFAULT_HEADLIGHT, QUALITIES, Quality
 from ..scene.cameras import DEFAULT_CAMERAS, check_camera_names
 from ..tasks import get_task
@@ -319,7 +319,7 @@ def resolved_factors(config: SceneConfig, object_offset: Sequence[float]) -> dic
         elif value is None:
             value = _DEFAULTS[name]
         out[name] = value
-    return FactorValues.to_dict(FactorValues()) | {k: _jsonable(v) for k, v in out.items()}
+    return {name: to_jsonable(value) for name, value in out.items()}
 
 
 _DEFAULTS: dict[str, Any] = {
@@ -335,13 +335,3 @@ _DEFAULTS: dict[str, Any] = {
     "distractors": (),
 }
 assert set(_DEFAULTS) | {"object_pos"} == set(FACTORS)
-
-
-def _jsonable(value: Any) -> Any:
-    from dataclasses import asdict, is_dataclass
-
-    if is_dataclass(value):
-        return asdict(value)
-    if isinstance(value, (tuple, list)):
-        return [_jsonable(v) for v in value]
-    return value

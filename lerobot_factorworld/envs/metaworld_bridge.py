@@ -56,24 +56,6 @@ def _nominal_rand_vec(task: TaskSpec, space: Any) -> np.ndarray:
     return nominal
 
 
-@cache
-def _nominal_cached(metaworld_name: str) -> tuple[float, ...]:
-    from metaworld.env_dict import ALL_V3_ENVIRONMENTS
-
-    from ..tasks import get_task
-
-    env = ALL_V3_ENVIRONMENTS[metaworld_name]()
-    nominal = _nominal_rand_vec(get_task(metaworld_name), env._random_reset_space)
-    env.close()
-    return tuple(float(v) for v in nominal)
-
-
-def nominal_object_xy(task: TaskSpec) -> tuple[float, float]:
-    """World (x, y) of the object's nominal start (before the object-position factor)."""
-    x, y = _nominal_cached(task.metaworld_name)[:2]
-    return x, y
-
-
 def reset_metaworld(
     env: Any,
     task: TaskSpec,

@@ -69,7 +69,7 @@ class FactorValues:
         return {f.name: getattr(self, f.name) for f in fields(self) if getattr(self, f.name) is not None}
 
     def to_dict(self) -> dict[str, Any]:
-        return {name: _to_jsonable(value) for name, value in asdict(self).items()}
+        return {name: to_jsonable(value) for name, value in asdict(self).items()}
 
     @classmethod
     def from_dict(cls, data: dict[str, Any]) -> FactorValues:
@@ -173,11 +173,16 @@ def load_configs(path: str | Path) -> list[SceneConfig]:
     return [SceneConfig.from_dict(item) for item in data]
 
 
-def _to_jsonable(value: Any) -> Any:
+def to_jsonable(value: Any) -> Any:
+    """Tuples -> lists and dataclasses (``SceneObject``) -> dicts, recursively."""
+    from dataclasses import is_dataclass
+
+    if is_dataclass(value):
+        value = asdict(value)
     if isinstance(value, (tuple, list)):
-        return [_to_jsonable(v) for v in value]
+        return [to_jsonable(v) for v in value]
     if isinstance(value, dict):
-        return {k: _to_jsonable(v) for k, v in value.items()}
+        return {k: to_jsonable(v) for k, v in value.items()}
     return value
 
 
