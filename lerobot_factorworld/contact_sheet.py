@@ -16,8 +16,19 @@ from .factors.registry import FACTORS, supported_factors
 from .factors.sampling import SamplingOptions, factor_rng, sample_factor
 from .factors.values import FactorValues, SceneConfig
 from .tasks import get_task
+from .validation import (
+    check_at_least,
+    check_cameras,
+    check_image_size,
+    check_output_file,
+    check_quality,
+    check_seed,
+    check_split,
+    check_tasks,
+)
 
 LABEL_WIDTH = 150
+IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg", ".webp")  # formats PIL writes from an RGB image
 
 
 @dataclass
@@ -28,7 +39,7 @@ class ContactSheetConfig:
         task: Task name (``factorworld tasks`` lists them).
         n_values: Values shown per factor.
         image_size: Side of each rendered image in pixels.
-        camera: Camera to render (``front``, ``side`` or ``top``).
+        camera: Camera to render (``factorworld cameras`` lists them).
         quality: ``fast`` or ``full`` rendering.
         seed: Seed for the factor values.
         split: Asset split to draw discrete values from.
@@ -43,6 +54,16 @@ class ContactSheetConfig:
     seed: int = 0
     split: str = "eval"
     out: str = "outputs/contact_sheet.png"
+
+    def __post_init__(self) -> None:
+        (self.task,) = check_tasks([self.task])
+        check_at_least("n_values", self.n_values, 1)
+        check_image_size(self.image_size)
+        (self.camera,) = check_cameras([self.camera], "camera")
+        check_quality(self.quality)
+        check_seed(self.seed)
+        check_split(self.split)
+        check_output_file(self.out, "out", IMAGE_SUFFIXES)
 
 
 def contact_sheet_rows(cfg: ContactSheetConfig) -> list[tuple[str, list[SceneConfig]]]:

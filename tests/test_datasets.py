@@ -220,3 +220,101 @@ def test_several_tasks_in_one_video_dataset_and_append(tmp_path):
     collect(tiny(root, **settings, seed=5, mode="append"))
     records = episode_records("local/multi", root)
     assert len(records) == 4 and len(json.loads((root / "meta" / "factorworld.json").read_text())["history"]) == 1
+
+
+def cli_refusal(argv: list[str], capsys) -> tuple[int, str]:
+    from lerobot_factorworld.cli import main
+
+    with pytest.raises(SystemExit) as exit_info:
+        main(argv)
+    err = capsys.readouterr().err
+    assert len(err.splitlines()) == 1 and err.startswith("error: ") and "Traceback" not in err, err
+    return exit_info.value.code, err
+
+
+def test_every_refusal_leaves_the_existing_dataset_untouched(dataset, capsys):
+    root, _ = dataset
+    same = [
+        "collect",
+        "--task=pick-place",
+        f"--factors=[{','.join(FACTORS)}]",
+        "--n_envs=2",
+        "--demos_per_env=2",
+        "--seed=3",
+        f"--root={root}",
+        "--repo_id=local/tiny",
+        "--workers=1",
+        "--episodes_per_shard=1",
+        "--use_videos=false",
+    ]
+    before = {p: p.stat().st_mtime_ns for p in root.rglob("*") if p.is_file()}
+    refusals = [
+        (["--task=pick-plac"], 2, "valid tasks"),
+        (["--image_size=2"], 2, "image_size must be"),
+        (["--cameras=wrist"], 2, "valid cameras"),
+        (["--sampling.texture_folder=/nonexistent"], 2, "does not exist"),
+        (["--mode=overwrite", "--bogus=1"], 2, "unknown setting(s) --bogus"),
+        (["--seed=4"], 1, "collected with other settings (seed: 3 -> 4); nothing was changed"),
+        ([], 1, "already complete with these settings"),
+        (["--mode=append", "--cameras=side"], 1, "cannot append"),
+        (["--mode=append", "--use_videos=true"], 1, "use_videos: False -> True"),
+    ]
+    for extra, status, expected in refusals:
+        code, err = cli_refusal([*same, *extra], capsys)
+        assert code == status and expected in err, (extra, err)
+    assert before == {p: p.stat().st_mtime_ns for p in root.rglob("*") if p.is_file()}
+    assert not staging_dir(root).exists()
+
+
+def test_a_folder_that_is_not_a_dataset_is_never_overwritten(tmp_path, capsys):
+    folder = tmp_path / "my_work"
+    folder.mkdir()
+    (folder / "notes.txt").write_text("keep me")
+    for mode in ("new", "overwrite", "append"):
+        code, err = cli_refusal(["collect", f"--root={folder}", "--repo_id=local/x", f"--mode={mode}"], capsys)
+        assert code == 1 and "holds no factorworld dataset" in err, err
+    code, err = cli_refusal(["collect", f"--root={folder / 'notes.txt'}", "--repo_id=local/x"], capsys)
+    assert code == 2 and "is a file, not a folder" in err
+    assert [p.name for p in folder.iterdir()] == ["notes.txt"] and (folder / "notes.txt").read_text() == "keep me"
+    assert not staging_dir(folder).exists()
+
+
+def test_action_noise_stream_is_independent_of_the_env_stream(make_env):
+    import numpy as np
+    from gymnasium.utils.seeding import np_random
+
+    from lerobot_factorworld.datasets.collect import _rollout, episode_seed, noise_rng
+
+    env = make_env("pick-place", cameras=("front",), image_size=8, max_episode_steps=3)
+    handed = []
+
+    def spy(policy, state, rng, noise):  # records the noise generator the collector hands the expert
+        handed.append(rng)
+        return np.zeros(4, dtype=np.float32)
+
+    seed = episode_seed(3, 0, 1, 0, 0)
+    frames, _ = _rollout(env, None, seed, 0.002, spy)
+    assert len(frames) == 3 and all(rng is handed[0] for rng in handed)
+    env_rng, _ = np_random(seed)  # what env.reset(seed=seed) seeds the env's own generator with
+    assert handed[0].bit_generator.state == noise_rng(seed).bit_generator.state != env_rng.bit_generator.state
+    for s in (0, 1, seed):
+        env_draws, noise_draws = np_random(s)[0].random(256), noise_rng(s).random(256)
+        assert not np.isin(noise_draws, env_draws).any()  # no shared numbers, not even shifted
+        assert abs(np.corrcoef(env_draws, noise_draws)[0, 1]) < 0.25
+    assert np.array_equal(noise_rng(seed).normal(size=8), noise_rng(seed).normal(size=8))
+
+
+def test_the_same_seed_gives_identical_datasets(tmp_path):
+    import torch
+    from lerobot.datasets.lerobot_dataset import LeRobotDataset
+
+    roots = [tmp_path / "first", tmp_path / "second"]
+    for root in roots:
+        collect(tiny(root, n_envs=1, demos_per_env=1, factors=["light"], repo_id="local/same"))
+    first, second = (LeRobotDataset("local/same", root=root) for root in roots)
+    assert len(first) == len(second) > 1
+    for i in range(len(first)):
+        a, b = first[i], second[i]
+        for key in ("action", "observation.state", "observation.images.front"):
+            assert torch.equal(a[key], b[key]), (i, key)
+    assert episode_records("local/same", roots[0]) == episode_records("local/same", roots[1])

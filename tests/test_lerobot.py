@@ -57,3 +57,68 @@ def test_lerobot_eval_runs_a_lerobot_policy_on_factorworld(tmp_path):
     assert set(info["per_group"]) == {"train", "camera_pos"}
     assert info["overall"]["n_episodes"] == 4
     shutil.rmtree(out / "videos", ignore_errors=True)
+
+
+@pytest.mark.parametrize(
+    ("settings", "expected"),
+    [
+        ({"task": "pick-plac"}, "unknown task 'pick-plac'; valid tasks: pick-place"),
+        ({"task": "pick-place,nope"}, "unknown task 'nope'"),
+        ({"cameras": "front,wrist"}, "valid cameras: front, side, top, far"),
+        ({"image_size": 3}, "image_size must be at least 8 pixels"),
+        ({"quality": "ultra"}, "unknown quality 'ultra'; valid: fast, full"),
+        ({"fps": 30}, "fps is fixed by the simulator"),
+        ({"episode_length": 0}, "episode_length must be at least 1"),
+        ({"n_train_envs": 0}, "n_train_envs must be at least 1"),
+        ({"n_test_envs": 0}, "n_test_envs must be at least 1"),
+        ({"seed": -1}, "seed must be at least 0"),
+        ({"train_factors": ["lighting"]}, "unknown factor(s) 'lighting'; valid factors"),
+        ({"shifts": ["camera"]}, "unknown factor(s) 'camera'; valid factors"),
+        ({"shifts": ["light+light"]}, "pair of distinct factors"),
+        ({"shifts": ["light", "light"]}, "more than once"),
+        ({"task": "door-open", "shifts": ["object_shape"]}, "factor 'object_shape' does not apply to task 'door-open'"),
+        ({"task": "door-open", "shifts": ["light+object_size"]}, "factor 'object_size' does not apply"),
+        ({"include_train": False}, "nothing to evaluate"),
+        ({"configs_path": "/nonexistent/envs.json"}, "configs_path /nonexistent/envs.json does not exist"),
+    ],
+)
+def test_env_config_refuses_bad_settings_when_parsed(settings, expected):
+    from lerobot_factorworld.envs.configs import FactorWorldEnvConfig
+
+    with pytest.raises((ValueError, FileNotFoundError)) as err:
+        FactorWorldEnvConfig(**settings)
+    assert expected in str(err.value) and "\n" not in str(err.value)
+
+
+def test_env_config_checks_the_configs_file_and_asset_folders(tmp_path):
+    from lerobot_factorworld.envs.configs import FactorWorldEnvConfig
+    from lerobot_factorworld.factors.sampling import SamplingOptions, sample_configs
+    from lerobot_factorworld.factors.values import save_configs
+
+    path = save_configs(sample_configs("door-open", 2, factors=["light"]), tmp_path / "envs.json")
+    assert FactorWorldEnvConfig(task="door-open", configs_path=str(path)).configs_path == str(path)
+    with pytest.raises(ValueError, match="holds no configuration for task"):
+        FactorWorldEnvConfig(task="door-open,pick-place", configs_path=str(path))
+    (tmp_path / "broken.json").write_text("{not json")
+    with pytest.raises(ValueError, match="holds no valid configurations"):
+        FactorWorldEnvConfig(configs_path=str(tmp_path / "broken.json"))
+    with pytest.raises(ValueError, match="no texture files found"):
+        FactorWorldEnvConfig(sampling=SamplingOptions(texture_folder=str(tmp_path)))
+
+
+def test_lerobot_eval_fails_on_a_bad_env_setting_before_building_a_policy(tmp_path):
+    cmd = [
+        str(LEROBOT_EVAL),
+        "--env.type=factorworld",
+        "--env.task=door-open",
+        "--env.shifts=[object_shape]",
+        "--policy.type=act",
+        "--policy.device=cpu",
+        f"--output_dir={tmp_path / 'eval'}",
+    ]
+    result = subprocess.run(cmd, capture_output=True, text=True, env={**os.environ, "MUJOCO_GL": "egl"}, timeout=300)
+    assert result.returncode != 0
+    output = result.stdout + result.stderr
+    assert "factor 'object_shape' does not apply to task 'door-open'" in output, output[-3000:]
+    assert "Making policy" not in output and "Making environment" not in output
+    assert not (tmp_path / "eval").exists()

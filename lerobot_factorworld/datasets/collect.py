@@ -15,7 +15,7 @@ import shutil
 import time
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import asdict, dataclass, field
-from multiprocessing import get_context
+from multiprocessing import get_all_start_methods, get_context
 from pathlib import Path
 from typing import Any
 
@@ -23,6 +23,22 @@ import numpy as np
 
 from ..factors.registry import PAPER_STUDY_FACTORS
 from ..factors.sampling import SamplingOptions
+from ..validation import (
+    check_asset_folders,
+    check_at_least,
+    check_cameras,
+    check_choice,
+    check_factors,
+    check_folder_target,
+    check_image_size,
+    check_quality,
+    check_repo_id,
+    check_seed,
+    check_split,
+    check_std,
+    check_tasks,
+    split_list,
+)
 
 MODES = ("new", "overwrite", "append")
 PLAN_FILE = "plan.json"
@@ -91,28 +107,40 @@ class CollectConfig:
     sampling: SamplingOptions = field(default_factory=SamplingOptions)
 
     def __post_init__(self) -> None:
-        from ..scene.cameras import check_camera_names
-        from ..tasks import get_task
-
-        for task in self.task_names:
-            get_task(task)
-        check_camera_names(self.camera_names)
-        if self.start_method not in START_METHODS:
-            raise ValueError(f"unknown start_method {self.start_method!r}; valid: {', '.join(START_METHODS)}")
-        if self.mode not in MODES:
-            raise ValueError(f"unknown mode {self.mode!r}; valid modes: {', '.join(MODES)}")
-        if self.n_envs < 1 or (self.demos_per_env or self.demos) < 1:
-            raise ValueError("n_envs and demos (or demos_per_env) must be at least 1")
-        if "/" not in self.repo_id:
-            raise ValueError(f"repo_id must look like 'user/name', got {self.repo_id!r}")
+        """Refuse every invalid setting here, when it is parsed: before any worker starts or data is touched."""
+        check_factors(self.factors, check_tasks(self.task))
+        check_at_least("n_envs", self.n_envs, 1)
+        if self.demos_per_env is None:
+            check_at_least("demos", self.demos, 1)
+            if self.demos < self.n_envs:
+                raise ValueError(f"demos ({self.demos}) must be at least n_envs ({self.n_envs}): one per environment")
+        else:
+            check_at_least("demos_per_env", self.demos_per_env, 1)
+        check_split(self.split)
+        check_asset_folders(self.sampling.texture_folder, self.sampling.shape_folder)
+        check_seed(self.seed)
+        check_cameras(self.cameras)
+        check_image_size(self.image_size)
+        check_quality(self.quality)
+        check_std("action_noise", self.action_noise)
+        if self.max_episode_steps is not None:
+            check_at_least("max_episode_steps", self.max_episode_steps, 1)
+        check_at_least("max_attempts", self.max_attempts, 1)
+        root = check_folder_target(self.root, "root")
+        check_folder_target(staging_dir(root), "root's staging folder")
+        check_repo_id(self.repo_id)
+        check_at_least("workers", self.workers, 0)
+        check_at_least("episodes_per_shard", self.episodes_per_shard, 1)
+        check_choice("start_method", self.start_method, ("auto", *get_all_start_methods()))
+        check_choice("mode", self.mode, MODES)
 
     @property
     def task_names(self) -> list[str]:
-        return [t.strip() for t in self.task.split(",") if t.strip()]
+        return check_tasks(self.task)
 
     @property
     def camera_names(self) -> tuple[str, ...]:
-        return tuple(c.strip() for c in self.cameras.split(",") if c.strip())
+        return tuple(split_list(self.cameras))
 
     def fingerprint(self) -> dict[str, Any]:
         """The settings that determine the collected data."""
@@ -174,6 +202,19 @@ def episode_seed(cfg_seed: int, task_index: int, env_index: int, demo: int, atte
     return int(np.random.SeedSequence([cfg_seed, task_index, env_index, demo, attempt]).generate_state(1)[0])
 
 
+NOISE_STREAM = 0  # spawn key of the action-noise stream under an episode seed
+
+
+def noise_rng(seed: int) -> np.random.Generator:
+    """The expert's action-noise stream for the episode reset with ``seed``.
+
+    ``env.reset(seed=seed)`` seeds the env's own generator (object start) with ``SeedSequence(seed)``;
+    the noise comes from a spawned child of that sequence, a statistically independent stream, so the
+    noise never repeats the numbers that placed the object.
+    """
+    return np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(NOISE_STREAM,)))
+
+
 def staging_dir(root: Path) -> Path:
     return root.parent / f"{root.name}.parts"
 
@@ -186,8 +227,11 @@ def collect(cfg: CollectConfig) -> CollectReport:
     _quiet_encoder()
     root = Path(cfg.root).resolve()
     parts = staging_dir(root)
+    try:  # sampling the environments checks the asset folders and the distractor layout: before touching data
+        jobs = plan_jobs(cfg)
+    except RuntimeError as err:
+        raise ValueError(str(err)) from err
     _prepare(cfg, root, parts)
-    jobs = plan_jobs(cfg)
     done = {job.job_id for job in jobs if (parts / job.job_id / JOB_RESULT_FILE).is_file()}
     todo = [job for job in jobs if job.job_id not in done]
     for stale in parts.glob("*.tmp"):  # a job interrupted by a crash: redo it from scratch
@@ -233,7 +277,6 @@ def collect(cfg: CollectConfig) -> CollectReport:
 
 
 WORKER_PRELOAD = "lerobot_factorworld.datasets.worker_preload"
-START_METHODS = ("auto", "fork", "forkserver", "spawn")
 
 
 def _worker_context(start_method: str):
@@ -266,33 +309,59 @@ def _quiet_encoder() -> None:
 
 
 def _prepare(cfg: CollectConfig, root: Path, parts: Path) -> None:
-    """Refuse to mix different settings; resume identical ones; overwrite or append on request."""
+    """Refuse to mix different settings; resume identical ones; overwrite or append on request.
+
+    Every refusal happens before anything on disk is changed."""
     fingerprint = cfg.fingerprint()
     plan_path = parts / PLAN_FILE
+    holds_data = root.is_dir() and any(root.iterdir())
+    previous = _read_sidecar(root) if holds_data else None
+    if holds_data and previous is None:
+        raise FileExistsError(
+            f"{root} is not empty and holds no factorworld dataset (no {SIDECAR}); nothing was changed. "
+            "Choose another --root (a new or empty folder)"
+        )
+    if cfg.mode == "append" and previous is not None:
+        _check_appendable(previous["settings"], fingerprint, root)
     if cfg.mode == "overwrite":
         for path in (root, parts):
             if path.exists():
                 shutil.rmtree(path)
-    elif root.exists() and cfg.mode == "new" and not plan_path.is_file():
-        previous = _read_sidecar(root)
-        if previous is None or previous.get("settings") != fingerprint:
-            diff = _settings_diff(previous.get("settings", {}) if previous else {}, fingerprint)
+    elif holds_data and cfg.mode == "new" and not plan_path.is_file():
+        if previous.get("settings") != fingerprint:
+            diff = _settings_diff(previous.get("settings", {}), fingerprint)
             raise FileExistsError(
                 f"{root} already holds a dataset collected with other settings ({diff}); nothing was changed. "
                 "Pass --mode=overwrite to replace it or --mode=append to add these demos to it."
             )
-        if not list(parts.glob("*")) and previous is not None:
+        if not list(parts.glob("*")):
             raise FileExistsError(f"{root} is already complete with these settings; use --mode=append to add more")
     if plan_path.is_file():
-        previous = json.loads(plan_path.read_text())
-        if previous["settings"] != fingerprint:
+        staged = json.loads(plan_path.read_text())
+        if staged["settings"] != fingerprint:
             raise FileExistsError(
                 f"an unfinished collection with other settings is staged in {parts} "
-                f"({_settings_diff(previous['settings'], fingerprint)}); re-run it with its settings to finish it, "
+                f"({_settings_diff(staged['settings'], fingerprint)}); re-run it with its settings to finish it, "
                 "or pass --mode=overwrite to discard it"
             )
     parts.mkdir(parents=True, exist_ok=True)
     _atomic_write(plan_path, json.dumps({"settings": fingerprint, "mode": cfg.mode}, indent=1, sort_keys=True))
+
+
+# Settings that fix the dataset's features: LeRobot can only merge datasets that agree on them.
+SCHEMA_SETTINGS = ("cameras", "image_size", "use_videos")
+
+
+def _check_appendable(old: dict, new: dict, root: Path) -> None:
+    """Appending merges with LeRobot's ``aggregate_datasets``, which needs identical features: check now,
+    not after the collection."""
+    old_schema = {k: split_list(old.get(k)) if k == "cameras" else old.get(k) for k in SCHEMA_SETTINGS}
+    new_schema = {k: split_list(new[k]) if k == "cameras" else new[k] for k in SCHEMA_SETTINGS}
+    if old_schema != new_schema:
+        raise FileExistsError(
+            f"cannot append to {root}: its frames have other features ({_settings_diff(old_schema, new_schema)}); "
+            f"nothing was changed. Appending needs the same {', '.join(SCHEMA_SETTINGS)}"
+        )
 
 
 def _settings_diff(old: dict, new: dict) -> str:
@@ -324,6 +393,7 @@ def run_job(job: Job, settings: dict, parts_dir: str) -> dict:
         quality=cfg.quality,
         max_episode_steps=cfg.max_episode_steps,
         terminate_on_success=cfg.end_on_success,
+        object_pos_width=cfg.sampling.widths.get("object_pos"),  # recorded with the data (sampling settings)
         scene_cache_size=1,
     )
     policy = expert_policy(job.task)
@@ -387,7 +457,7 @@ def _rollout(env, policy, seed: int, noise: float, expert_action) -> tuple[list[
     from lerobot.utils.constants import ACTION, OBS_IMAGES, OBS_STATE
 
     obs, info = env.reset(seed=seed)
-    rng = np.random.default_rng(seed)
+    rng = noise_rng(seed)
     frames = []
     for _ in range(env._max_episode_steps):
         action = expert_action(policy, env.state_observation, rng, noise)
