@@ -1,6 +1,7 @@
 """RT-1: tokenizer, mask, shapes, FiLM identity, save/load, token reuse, offline weights, and real
 ``lerobot-train`` / ``lerobot-eval`` runs on an exported Factor World dataset."""
 
+import os
 import re
 import subprocess
 import sys
@@ -9,14 +10,14 @@ from pathlib import Path
 import numpy as np
 import pytest
 import torch
-from lerobot.configs import FeatureType, PolicyFeature
+from lerobot.configs import FeatureType, NormalizationMode, PolicyFeature
 
 import lerobot_factorworld.lerobot_plugin  # noqa: F401  (registers rt1 and its processor step)
 from lerobot_factorworld.policies.rt1.configuration_rt1 import LANGUAGE_EMBEDDING_KEY, PRESETS, RT1Config
 from lerobot_factorworld.policies.rt1.film_efficientnet import FiLM, FiLMEfficientNet
 from lerobot_factorworld.policies.rt1.modeling_rt1 import RT1Policy, photometric, random_shift
 from lerobot_factorworld.policies.rt1.tokenizers import ActionTokenizer
-from lerobot_factorworld.policies.rt1.transformer import RT1Transformer, block_causal_mask
+from lerobot_factorworld.policies.rt1.transformer import RT1Transformer, TransformerSpec, block_causal_mask
 
 CAMERA = "observation.images.front"
 
@@ -76,7 +77,8 @@ def test_block_causal_mask():
 
 def test_transformer_is_causal_over_steps():
     torch.manual_seed(0)
-    net = RT1Transformer(16, 32, 2, 4, steps=6, image_tokens=8, action_dims=4, bins=256, dropout=0.0).eval()
+    spec = TransformerSpec(16, 32, 2, 4, 8, "mlp", 64, 0.0, steps=6, image_tokens=8, action_dims=4, bins=256)
+    net = RT1Transformer(spec).eval()
     tokens = torch.randn(2, 6, 8, 16)
     changed = tokens.clone()
     changed[:, 4:] = torch.randn(2, 2, 8, 16)
@@ -274,3 +276,144 @@ def test_per_sample_loss_matches_the_mean_loss():
     mean, _ = policy(batch)
     per_sample, _ = policy(batch, reduction="none")
     assert per_sample.shape == (3,) and torch.allclose(per_sample.mean(), mean, atol=1e-5)
+
+
+# --- loading and initialisation ---------------------------------------------------------------------
+
+
+def b3_state_file(path: Path, seed: int = 1, classifier: bool = False) -> dict[str, torch.Tensor]:
+    """A torchvision efficientnet_b3 state dict as ImageNet weights come (random values, so no download)."""
+    from torchvision.models import efficientnet_b3
+
+    torch.manual_seed(seed)
+    state = efficientnet_b3(weights=None).state_dict()
+    if not classifier:
+        state = {k: v for k, v in state.items() if not k.startswith("classifier.")}
+    torch.save(state, path)
+    return state
+
+
+def test_b3_weights_load_strictly_and_wrong_keys_are_listed(tmp_path):
+    good = tmp_path / "b3.pth"
+    state = b3_state_file(good, classifier=True)
+    encoder = FiLMEfficientNet("efficientnet_b3", 384, 32, pretrained=True, weights_path=str(good))
+    loaded = {f"features.0.{k}": v for k, v in encoder.b3_stem.state_dict().items()}
+    assert loaded and all(torch.equal(v, state[k]) for k, v in loaded.items())
+
+    renamed = {k.replace("features.1.0.", "trunk.1.0."): v for k, v in state.items()}
+    bad = tmp_path / "renamed.pth"
+    torch.save(renamed, bad)
+    with pytest.raises(ValueError) as err:
+        FiLMEfficientNet("efficientnet_b3", 384, 32, pretrained=True, weights_path=str(bad))
+    message = str(err.value)
+    assert "features.1.0.block.0.0.weight" in message and "trunk.1.0.block.0.0.weight" in message
+    assert "missing" in message and "unexpected" in message
+
+    wrapped = tmp_path / "wrapped.pth"
+    torch.save({"state_dict": state}, wrapped)
+    with pytest.raises(ValueError, match=r"missing: .*unexpected: state_dict"):
+        FiLMEfficientNet("efficientnet_b3", 384, 32, pretrained=True, weights_path=str(wrapped))
+
+
+def test_a_checkpoint_trained_with_a_b3_weights_file_reloads_without_it(tmp_path):
+    weights = tmp_path / "b3.pth"
+    state = b3_state_file(weights)
+    policy = make_policy(backbone="efficientnet_b3", backbone_weights_path=str(weights), image_size=64)
+    assert policy.config.pretrained_backbone  # the path implies it, the preset's False does not win
+    stem = policy.model.encoder.b3_stem.state_dict()
+    assert all(torch.equal(v, state[f"features.0.{k}"]) for k, v in stem.items())
+    with torch.no_grad():  # as if training had moved the backbone away from the file's weights
+        for p in policy.model.encoder.parameters():
+            p.add_(0.01)
+    policy.save_pretrained(tmp_path / "ckpt")
+    weights.unlink()
+    with pytest.raises(FileNotFoundError, match="b3.pth"):
+        RT1Policy(policy.config)  # a fresh build does need the file ...
+    loaded = RT1Policy.from_pretrained(tmp_path / "ckpt")  # ... a reload does not
+    for (name, a), b in zip(policy.state_dict().items(), loaded.state_dict().values(), strict=True):
+        assert torch.equal(a, b), name
+    policy.reset()
+    assert torch.equal(policy.select_action(frame(2, seed=3)), loaded.select_action(frame(2, seed=3)))
+
+
+def test_backbone_weight_settings_are_checked_in_the_config():
+    with pytest.raises(ValueError, match="efficientnet_b3 ImageNet weights are not shipped"):
+        make_policy(backbone="efficientnet_b3", pretrained_backbone=True)
+    with pytest.raises(ValueError, match="only read by backbone=efficientnet_b3"):
+        make_policy(backbone_weights_path="/tmp/b3.pth")
+    with pytest.raises(ValueError, match="no pretrained weights for backbone 'tiny'"):
+        make_policy(pretrained_backbone=True)
+    saved = RT1Config(backbone="efficientnet_b3", pretrained_backbone=False, backbone_weights_path="/tmp/b3.pth")
+    assert saved.pretrained_backbone  # what earlier checkpoints saved next to the path still means "load it"
+
+
+def test_position_embeddings_start_at_the_image_tokens_scale():
+    policy = make_policy()
+    policy.train()
+    transformer = policy.model.transformer
+    with torch.no_grad():
+        tokens = policy.model.frame_tokens({CAMERA: torch.rand(8, 3, 84, 84)}, torch.randn(8, 384))
+        projected = transformer.input(tokens)
+    positions = transformer.position.weight
+    length, dim = positions.shape
+    assert abs(positions.std().item() / (2 / (length + dim)) ** 0.5 - 1) < 0.1  # Keras Dense on one-hot: Glorot
+    assert 1 / 3 < positions.std().item() / projected.std().item() < 3, (positions.std(), projected.std())
+
+
+def test_actions_must_be_min_max_normalised():
+    visual_state = {"VISUAL": NormalizationMode.IDENTITY, "STATE": NormalizationMode.MEAN_STD}
+    for mode in (NormalizationMode.MEAN_STD, NormalizationMode.QUANTILES, NormalizationMode.IDENTITY):
+        with pytest.raises(ValueError, match=f"ACTION normalization MIN_MAX .*got '{mode.value}'"):
+            make_policy(normalization_mapping={**visual_state, "ACTION": mode})
+    with pytest.raises(ValueError, match="got None"):
+        make_policy(normalization_mapping=visual_state)
+    assert make_policy(normalization_mapping={**visual_state, "ACTION": "MIN_MAX"})
+
+
+@pytest.mark.parametrize("reuse", [True, False])
+def test_predict_action_chunk_leaves_the_history_unchanged(reuse):
+    policy = make_policy(token_reuse=reuse)
+    policy.reset()
+    policy.predict_action_chunk(frame(2, seed=0))
+    assert not policy._tokens and not policy._frames  # an empty history stays empty
+    for seed in range(3):
+        policy.select_action(frame(2, seed=seed))
+    history = [t.clone() if reuse else {k: v.clone() for k, v in t.items()} for t in policy._tokens or policy._frames]
+    policy.train()
+    first = policy.predict_action_chunk(frame(2, seed=7))
+    second = policy.predict_action_chunk(frame(2, seed=7))
+    assert torch.equal(first, second) and first.shape == (2, 1, 4)
+    assert policy.training  # the mode is restored too
+    after = list(policy._tokens or policy._frames)
+    assert len(after) == len(history)
+    for a, b in zip(after, history, strict=True):
+        assert torch.equal(a, b) if reuse else all(torch.equal(a[k], b[k]) for k in b)
+    assert torch.equal(policy.select_action(frame(2, seed=7)), first[:, 0])  # the same prediction, now stored
+
+
+def test_language_processor_honours_language_dim_and_leaves_the_environment_alone(monkeypatch):
+    from lerobot.configs import PipelineFeatureType
+
+    from lerobot_factorworld.policies.rt1 import processor_rt1
+
+    monkeypatch.delenv("HF_HUB_OFFLINE", raising=False)
+    environment = dict(os.environ)
+    processor_rt1.sentence_encoder.cache_clear()  # load for real in this test
+    processor_rt1._CACHE.clear()
+    stats = {"action": {"min": torch.full((4,), -1.0), "max": torch.ones(4)}}
+    batch = {CAMERA: torch.rand(2, 3, 8, 8), "task": ["open the door", "close the door"]}
+    for dim in (384, 16):
+        policy = make_policy(language_dim=dim)
+        pre, _ = processor_rt1.make_rt1_pre_post_processors(policy.config, stats)
+        step = next(s for s in pre.steps if isinstance(s, processor_rt1.LanguageEmbeddingStep))
+        assert step.get_config()["language_dim"] == dim
+        features = step.transform_features({PipelineFeatureType.OBSERVATION: {}})
+        assert features[PipelineFeatureType.OBSERVATION][LANGUAGE_EMBEDDING_KEY].shape == (dim,)
+        if dim == 384:
+            embedding = pre(dict(batch))[LANGUAGE_EMBEDDING_KEY]
+            assert embedding.shape == (2, 384)
+            assert policy.select_action({**frame(2), LANGUAGE_EMBEDDING_KEY: embedding}).shape == (2, 4)
+        else:
+            with pytest.raises(ValueError, match="language_dim=16, but .* gives 384-d embeddings"):
+                pre(dict(batch))
+    assert dict(os.environ) == environment

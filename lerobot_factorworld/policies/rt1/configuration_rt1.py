@@ -23,6 +23,8 @@ from dataclasses import dataclass, field, fields
 from lerobot.configs import FeatureType, NormalizationMode, PreTrainedConfig
 from lerobot.optim import AdamWConfig
 
+from .film_efficientnet import BACKBONES
+
 PRESETS: dict[str, dict] = {
     "rt1": dict(
         backbone="efficientnet_b3",
@@ -82,8 +84,10 @@ class RT1Config(PreTrainedConfig):
         action_bins: Uniform bins per action dimension (RT-1: 256), over the min-max normalised range.
         num_tokens: TokenLearner tokens per frame and camera (RT-1: 8).
         backbone: ``efficientnet_b3``, ``efficientnet_lite0`` or ``tiny``.
-        pretrained_backbone: Load ImageNet weights (lite0: shipped; b3: from ``backbone_weights_path``).
-        backbone_weights_path: Local torchvision EfficientNet-B3 state dict (never downloaded).
+        pretrained_backbone: Start from ImageNet weights (lite0: shipped; b3: from ``backbone_weights_path``).
+        backbone_weights_path: Local torchvision EfficientNet-B3 state dict (never downloaded; implies
+            ``pretrained_backbone``), loaded strictly when a policy is built fresh. ``from_pretrained`` does
+            not read it: the checkpoint holds the trained backbone.
         image_size: Side the frames are resized to before the backbone.
         token_dim: Channels of the FiLM-EfficientNet output (1x1 conv) and of each image token.
         dim / layers / heads / head_dim / ffn / ffn_dim / dropout: the transformer (RT-1: 8 heads of 128 on
@@ -93,7 +97,8 @@ class RT1Config(PreTrainedConfig):
             or ``none``.
         photometric: Brightness shift in [-0.125, 0.125], contrast and saturation factors in [0.5, 1.5].
         token_reuse: At inference, tokenize only the new frame and reuse the window's earlier tokens.
-        language_dim: Size of the sentence embedding (MiniLM-L6: 384).
+        language_dim: Size of the sentence embedding; RT-1's processor (MiniLM-L6) gives 384.
+        normalization_mapping: ACTION must stay MIN_MAX (the bins span [-1, 1]); other modes are refused.
     """
 
     preset: str = "small"
@@ -132,6 +137,10 @@ class RT1Config(PreTrainedConfig):
         super().__post_init__()
         if self.preset not in PRESETS:
             raise ValueError(f"unknown RT-1 preset {self.preset!r}; valid presets: {', '.join(PRESETS)}")
+        if self.backbone_weights_path:
+            # A weights file means "start from it", as it always did: neither the preset's False nor the False
+            # that earlier checkpoints saved next to the path may turn it off.
+            self.pretrained_backbone = True
         names = {f.name for f in fields(self)}
         for key, value in PRESETS[self.preset].items():
             assert key in names, key
@@ -141,6 +150,36 @@ class RT1Config(PreTrainedConfig):
             raise ValueError(f"unknown crop {self.crop!r}; valid: {', '.join(CROPS)}")
         if self.n_obs_steps < 1 or self.action_bins < 2:
             raise ValueError("n_obs_steps must be >= 1 and action_bins >= 2")
+        self._check_backbone_weights()
+        self._check_action_normalization()
+
+    def _check_backbone_weights(self) -> None:
+        """Where the ImageNet weights come from, checked before anything is built (the file is read at build)."""
+        if self.backbone not in BACKBONES:
+            raise ValueError(f"unknown backbone {self.backbone!r}; valid backbones: {', '.join(BACKBONES)}")
+        if self.backbone_weights_path and self.backbone != "efficientnet_b3":
+            raise ValueError(
+                f"backbone_weights_path is only read by backbone=efficientnet_b3, not {self.backbone!r} "
+                "(efficientnet_lite0's ImageNet weights come with its package)"
+            )
+        if self.pretrained_backbone and self.backbone == "tiny":
+            raise ValueError(
+                "no pretrained weights for backbone 'tiny'; pretrained: efficientnet_lite0, efficientnet_b3"
+            )
+        if self.pretrained_backbone and self.backbone == "efficientnet_b3" and not self.backbone_weights_path:
+            raise ValueError(
+                "efficientnet_b3 ImageNet weights are not shipped: pass backbone_weights_path=<local torchvision "
+                "efficientnet_b3 state dict>, or use backbone=efficientnet_lite0 for offline pretrained weights"
+            )
+
+    def _check_action_normalization(self) -> None:
+        """The bins span [-1, 1], which is where MIN_MAX puts the dataset's min..max; other modes do not."""
+        mode = self.normalization_mapping.get(FeatureType.ACTION)  # str enum: also finds the key "ACTION"
+        if mode != NormalizationMode.MIN_MAX:
+            raise ValueError(
+                f"RT-1 needs ACTION normalization MIN_MAX (its {self.action_bins} bins span the min-max normalised "
+                f"range [-1, 1]); got {getattr(mode, 'value', mode)!r}. Valid: MIN_MAX"
+            )
 
     def validate_features(self) -> None:
         if not self.image_features:

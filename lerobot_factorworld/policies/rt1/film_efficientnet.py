@@ -135,6 +135,51 @@ def load_lite0_imagenet(net: LiteNet) -> None:
     net.load_state_dict(state, strict=True)
 
 
+B3_CLASSIFIER_PREFIX = "classifier."  # the ImageNet head: unused here, so a trunk-only file is fine
+
+
+def load_b3_imagenet(model: nn.Module, weights_path: str | Path) -> None:
+    """Load a torchvision EfficientNet-B3 state dict into ``model`` strictly (only the classifier may be absent).
+
+    A file with other key names (timm, lukemelas, a wrapped checkpoint) would otherwise leave the
+    backbone silently random; the error lists the keys that do not match.
+    """
+    path = Path(weights_path)
+    if not path.is_file():
+        raise FileNotFoundError(f"backbone weights file not found: {path}")
+    try:
+        state = torch.load(path, map_location="cpu", weights_only=True)
+    except Exception as err:  # noqa: BLE001  (pickle errors come in many types)
+        raise ValueError(f"cannot read {path} as a torch state dict: {err}") from err
+    if not isinstance(state, dict):
+        raise ValueError(f"{path} holds a {type(state).__name__}, not a state dict")
+    expected = model.state_dict()
+    trunk = {k: v for k, v in state.items() if not str(k).startswith(B3_CLASSIFIER_PREFIX)}
+    missing = sorted(k for k in expected if not k.startswith(B3_CLASSIFIER_PREFIX) and k not in trunk)
+    unexpected = sorted(str(k) for k in trunk if k not in expected)
+    mismatched = sorted(
+        f"{k} {tuple(v.shape)} vs {tuple(expected[k].shape)}"
+        for k, v in trunk.items()
+        if k in expected and (not isinstance(v, Tensor) or v.shape != expected[k].shape)
+    )
+    if missing or unexpected or mismatched:
+        problems = [
+            f"{len(keys)} {what}: {_listed(keys)}"
+            for what, keys in (("missing", missing), ("unexpected", unexpected), ("with the wrong shape", mismatched))
+            if keys
+        ]
+        raise ValueError(
+            f"{path} is not a torchvision efficientnet_b3 state dict (only {B3_CLASSIFIER_PREFIX}* may be missing); "
+            + "; ".join(problems)
+        )
+    model.load_state_dict(trunk, strict=False)  # every non-classifier key is present, checked above
+
+
+def _listed(keys: list[str], limit: int = 20) -> str:
+    shown = ", ".join(keys[:limit])
+    return shown + (f", ... ({len(keys) - limit} more)" if len(keys) > limit else "")
+
+
 # --- the FiLM-conditioned encoder ------------------------------------------------------------------
 
 
@@ -142,6 +187,8 @@ class FiLMEfficientNet(nn.Module):
     """Image (B, 3, H, W) in [0, 1] + context (B, D) -> feature map (B, out_dim, h, w).
 
     FiLM after every MBConv block, then a 1x1 convolution to ``out_dim`` and a final FiLM (RT-1).
+    ``pretrained`` loads the ImageNet weights now (lite0: from its package; b3: from ``weights_path``);
+    a policy restored from a checkpoint passes False, since the checkpoint already holds them.
     """
 
     def __init__(
@@ -177,17 +224,10 @@ class FiLMEfficientNet(nn.Module):
         from torchvision.models import efficientnet_b3
 
         model = efficientnet_b3(weights=None)
-        if pretrained or weights_path:
+        if pretrained:
             if not weights_path:
-                raise ValueError(
-                    "efficientnet_b3 ImageNet weights are not shipped: pass backbone_weights_path=<local torchvision "
-                    "efficientnet_b3 state dict>, or use backbone=efficientnet_lite0 for offline pretrained weights"
-                )
-            path = Path(weights_path)
-            if not path.is_file():
-                raise FileNotFoundError(f"backbone weights file not found: {path}")
-            state = torch.load(path, map_location="cpu", weights_only=True)
-            model.load_state_dict(state, strict=False)
+                raise ValueError("pretrained efficientnet_b3 needs weights_path (a local torchvision state dict)")
+            load_b3_imagenet(model, weights_path)
         features = model.features
         self.b3_stem = features[0]
         self.b3_blocks = nn.ModuleList(block for stage in features[1:8] for block in stage)

