@@ -1,7 +1,9 @@
 """Regenerate lerobot_factorworld/assets/asset_splits.json, the single source of the built-in splits.
 
-Deterministic: running it twice writes identical bytes. Run it after adding families, changing
-VARIANTS_PER_FAMILY, the curated Meta-World lists or TRAIN_FRACTION; tests fail until the file matches.
+It holds both split modes: ``family`` (whole families held out, the default) and ``variant`` (name by
+name). Deterministic: running it twice writes identical bytes. Run it after adding families, changing
+VARIANTS_PER_FAMILY, the curated Meta-World lists or their families, TRAIN_FRACTION or a task's
+object_family; tests fail until the file matches.
 
     python scripts/make_asset_splits.py [--check]
 """
@@ -15,7 +17,13 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from lerobot_factorworld.assets.library import KINDS, SPLITS, SPLITS_FILE, builtin_splits_document  # noqa: E402
+from lerobot_factorworld.assets.library import (  # noqa: E402
+    ASSET_SPLITS,
+    KINDS,
+    SPLITS,
+    SPLITS_FILE,
+    builtin_splits_document,
+)
 
 
 def render() -> str:
@@ -29,9 +37,12 @@ def main() -> int:
     args = parser.parse_args()
     text = render()
     doc = json.loads(text)
-    for kind in KINDS:
-        counts = doc["counts"][kind]
-        print(f"{kind:8s} " + "  ".join(f"{s}={counts[s]}" for s in SPLITS) + f"  total={sum(counts.values())}")
+    for mode in ASSET_SPLITS:
+        for kind in KINDS:
+            counts = doc["counts"][mode][kind]
+            families = doc["splits"][mode][kind]["families"]
+            sides = "  ".join(f"{s}={counts[s]} ({len(families[s])} families)" for s in SPLITS)
+            print(f"{mode:7s} {kind:8s} {sides}  total={sum(counts.values())}")
     current = SPLITS_FILE.read_text(encoding="utf-8") if SPLITS_FILE.exists() else None
     if args.check:
         if current != text:

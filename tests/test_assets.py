@@ -25,28 +25,64 @@ REPO = Path(__file__).resolve().parents[1]
 # pools and splits
 
 
+@pytest.mark.parametrize("mode", ["family", "variant"])
 @pytest.mark.parametrize(("kind", "min_train", "min_eval"), [("texture", 81, 81), ("shape", 100, 70)])
-def test_builtin_splits_disjoint_complete_and_large(kind: str, min_train: int, min_eval: int) -> None:
-    train, evals = A.split_names(kind, "train"), A.split_names(kind, "eval")
-    assert len(train) >= min_train and len(evals) >= min_eval
+def test_builtin_splits_disjoint_complete_and_large(kind: str, min_train: int, min_eval: int, mode: str) -> None:
+    train, evals = A.split_names(kind, "train", mode=mode), A.split_names(kind, "eval", mode=mode)
+    assert len(train) >= min_train and len(evals) >= min_eval  # the paper: 81/81 textures, 100/70 objects
     assert not set(train) & set(evals)
     assert len(set(train)) == len(train) and len(set(evals)) == len(evals)
     assert sorted(train + evals) == sorted(A.builtin_names(kind))
     assert list(train) == sorted(train)
 
 
-def test_pool_sizes_and_families() -> None:
-    assert len(A.TEXTURE_FAMILIES) >= 12 and len(A.SHAPE_FAMILIES) >= 12
-    assert not set(A.TEXTURE_FAMILIES) & set(A.SHAPE_FAMILIES)  # a proc: name tells its kind
-    assert len(A.builtin_names("texture")) >= 200
-    assert len(A.builtin_names("shape")) >= 220
-    assert all(A.asset_kind(n) == "texture" for n in A.builtin_names("texture"))
-    assert all(A.asset_kind(n) == "shape" for n in A.builtin_names("shape"))
+@pytest.mark.parametrize("kind", ["texture", "shape"])
+def test_family_split_holds_whole_families_out(kind: str) -> None:
+    train, evals = A.split_names(kind, "train"), A.split_names(kind, "eval")
+    assert (train, evals) == (A.split_names(kind, "train", mode="family"), A.split_names(kind, "eval", mode="family"))
+    train_fams, eval_fams = {A.asset_family(n) for n in train}, {A.asset_family(n) for n in evals}
+    assert not train_fams & eval_fams  # no family on both sides, Meta-World files included
+    assert train_fams | eval_fams == set(A.builtin_families(kind))
+    assert len(eval_fams) >= 5  # held out: several whole kinds, not a handful of variants
+    assert sorted(train_fams) == list(A.split_families(kind, "train"))
+    assert sorted(eval_fams) == list(A.split_families(kind, "eval"))
+    assert set(A.seen_families(kind)) <= train_fams  # what the default scenes show is never held out
+    # the per-variant split is what the family split fixes: most families sit on both of its sides
+    shared = {A.asset_family(n) for n in A.split_names(kind, "train", mode="variant")} & {
+        A.asset_family(n) for n in A.split_names(kind, "eval", mode="variant")
+    }
+    assert len(shared) > len(A.builtin_families(kind)) // 2
+
+
+def test_families_of_builtin_assets() -> None:
+    assert A.DEFAULT_ASSET_SPLIT == "family" and A.ASSET_SPLITS == ("family", "variant")
+    assert not set(A.builtin_families("texture")) & set(A.builtin_families("shape"))
+    assert A.asset_family("proc:marble-003") == "marble"
+    assert A.asset_family("metaworld:textures/wood2.png") == "wood"  # Meta-World's woods are one family
+    assert A.asset_family("metaworld:objects/meshes/puck/puck.stl") == "cylinder"
+    assert A.asset_family("file:/somewhere/x.png") == "file:/somewhere/x.png"  # outside any folder: its own
+    assert A.seen_families("texture") == ("grid", "wood") and A.seen_families("shape") == (
+        "box",
+        "cylinder",
+        "ellipsoid",
+    )
+    assert A.asset_families("shape")["proc:mug-004"] == "mug"
+
+
+def test_default_scene_textures_are_metaworlds() -> None:
+    """DEFAULT_TABLE/FLOOR_TEXTURE restate Meta-World's scene; check them against its XML."""
+    for scene in sorted((A.metaworld_assets_dir() / "scene").glob("basic_scene*.xml")):
+        text = scene.read_text(encoding="utf-8")
+        for tex, default in (("T_table", A.DEFAULT_TABLE_TEXTURE), ("T_floor", A.DEFAULT_FLOOR_TEXTURE)):
+            expected = f'name="{tex}"'
+            line = next(line for line in text.splitlines() if expected in line)
+            assert f'file="../{default.removeprefix("metaworld:")}"' in line, (scene.name, line)
 
 
 def test_splits_file_matches_code_and_script_is_deterministic() -> None:
     doc = json.loads(library.SPLITS_FILE.read_text(encoding="utf-8"))
     assert doc == library.builtin_splits_document(), "run: python scripts/make_asset_splits.py"
+    assert set(doc["splits"]) == {"family", "variant"}
     out = subprocess.run(
         [sys.executable, str(REPO / "scripts" / "make_asset_splits.py"), "--check"],
         capture_output=True,
@@ -54,13 +90,14 @@ def test_splits_file_matches_code_and_script_is_deterministic() -> None:
         check=False,
     )
     assert out.returncode == 0, out.stdout + out.stderr
-    assert "train=" in out.stdout and "eval=" in out.stdout
+    assert "family  texture  train=" in out.stdout and "variant shape" in out.stdout
 
 
-def test_hand_edited_splits_file_is_rejected(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+@pytest.mark.parametrize("mode", ["family", "variant"])
+def test_hand_edited_splits_file_is_rejected(tmp_path: Path, monkeypatch: pytest.MonkeyPatch, mode: str) -> None:
     doc = json.loads(library.SPLITS_FILE.read_text(encoding="utf-8"))
-    moved = doc["splits"]["texture"]["eval"].pop()
-    doc["splits"]["texture"]["train"].append(moved)  # sneak an eval texture into train
+    lists = doc["splits"][mode]["texture"]["names"]
+    lists["train"].append(lists["eval"].pop())  # sneak an eval texture into train
     edited = tmp_path / "asset_splits.json"
     edited.write_text(json.dumps(doc), encoding="utf-8")
     monkeypatch.setattr(library, "SPLITS_FILE", edited)
@@ -73,10 +110,29 @@ def test_hand_edited_splits_file_is_rejected(tmp_path: Path, monkeypatch: pytest
 
 
 def test_other_seed_resplits_builtin_pool() -> None:
-    a, b = A.split_names("shape", "eval", seed=1), A.split_names("shape", "eval", seed=1)
+    a, b = (
+        A.split_names("shape", "eval", seed=1, mode="variant"),
+        A.split_names("shape", "eval", seed=1, mode="variant"),
+    )
     assert a == b
-    assert a != A.split_names("shape", "eval")
-    assert not set(a) & set(A.split_names("shape", "train", seed=1))
+    assert a != A.split_names("shape", "eval", mode="variant")
+    assert not set(a) & set(A.split_names("shape", "train", seed=1, mode="variant"))
+
+
+@pytest.mark.parametrize(("kind", "min_train", "min_eval"), [("texture", 81, 81), ("shape", 100, 70)])
+def test_family_split_is_seeded(kind: str, min_train: int, min_eval: int) -> None:
+    by_seed = {}
+    for seed in (0, 1, 2):
+        train, evals = A.split_names(kind, "train", seed=seed), A.split_names(kind, "eval", seed=seed)
+        assert (train, evals) == (A.split_names(kind, "train", seed=seed), A.split_names(kind, "eval", seed=seed))
+        assert len(train) >= min_train and len(evals) >= min_eval
+        assert not {A.asset_family(n) for n in train} & {A.asset_family(n) for n in evals}
+        assert set(A.seen_families(kind)) <= set(A.split_families(kind, "train", seed=seed))
+        by_seed[seed] = A.split_families(kind, "eval", seed=seed)
+    assert len(set(by_seed.values())) == 3  # another seed holds other families out
+    assert by_seed[0] == tuple(
+        json.loads(library.SPLITS_FILE.read_text())["splits"]["family"][kind]["families"]["eval"]
+    )
 
 
 # ----------------------------------------------------------------------------------------------------------
@@ -252,6 +308,36 @@ def test_user_folder_split_and_loading(tmp_path: Path) -> None:
     assert rel == {n.split("/copy/", 1)[1] for n in A.split_names("texture", "eval", folder=copy)}
 
 
+def test_user_folder_family_split_keeps_subfolders_whole(tmp_path: Path) -> None:
+    rng = np.random.default_rng(1)
+    layout = {"wood/a.png": 0, "wood/b.png": 0, "wood/deep/c.png": 0, "tiles/a.png": 0, "tiles/b.png": 0}
+    layout |= {"cloth/a.png": 0, "cloth/b.jpg": 0, "one.png": 0, "two.png": 0}
+    for rel in layout:
+        (tmp_path / rel).parent.mkdir(parents=True, exist_ok=True)
+        Image.fromarray(rng.integers(0, 256, (8, 8, 3), dtype=np.uint8)).save(tmp_path / rel)
+    families = A.asset_families("texture", tmp_path)
+    assert sorted(set(families.values())) == ["cloth", "one.png", "tiles", "two.png", "wood"]
+    assert A.asset_family(f"file:{tmp_path / 'wood/deep/c.png'}", tmp_path) == "wood"
+    train, evals = A.split_names("texture", "train", tmp_path), A.split_names("texture", "eval", tmp_path)
+    assert sorted(train + evals) == sorted(families) and train and evals
+    assert not {families[n] for n in train} & {families[n] for n in evals}
+    assert set(A.split_families("texture", "eval", tmp_path)) == {families[n] for n in evals}
+    # a flat folder: every file is its own family, so both split modes agree
+    flat = tmp_path / "flat"
+    flat.mkdir()
+    for i in range(5):
+        Image.fromarray(rng.integers(0, 256, (8, 8, 3), dtype=np.uint8)).save(flat / f"t{i}.png")
+    assert A.split_names("texture", "eval", flat) == A.split_names("texture", "eval", flat, mode="variant")
+    # one family cannot be split by family: the error says what to do
+    single = tmp_path / "single"
+    (single / "only").mkdir(parents=True)
+    for i in range(3):
+        Image.fromarray(rng.integers(0, 256, (8, 8, 3), dtype=np.uint8)).save(single / "only" / f"t{i}.png")
+    with pytest.raises(ValueError, match=r"at least 2 texture families.*asset_split=variant"):
+        A.split_names("texture", "train", single)
+    assert len(A.split_names("texture", "eval", single, mode="variant")) == 1
+
+
 def test_big_user_mesh_is_simplified(tmp_path: Path) -> None:
     n = 120  # a UV sphere with ~28k faces
     th, ph = np.meshgrid(np.linspace(0.01, np.pi - 0.01, n), np.linspace(0, 2 * np.pi, 2 * n, endpoint=False))
@@ -277,6 +363,8 @@ def test_big_user_mesh_is_simplified(tmp_path: Path) -> None:
 def test_error_messages_name_valid_choices(tmp_path: Path) -> None:
     with pytest.raises(ValueError, match="unknown split 'test'; valid splits: train, eval"):
         A.split_names("texture", "test")  # type: ignore[arg-type]
+    with pytest.raises(ValueError, match="unknown asset split 'random'; valid asset splits: family, variant"):
+        A.split_names("texture", "train", mode="random")  # type: ignore[arg-type]
     with pytest.raises(ValueError, match="valid kinds: texture, shape"):
         A.split_names("sound", "train")  # type: ignore[arg-type]
     with pytest.raises(FileNotFoundError, match=str(tmp_path / "nope")):

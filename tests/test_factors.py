@@ -1,18 +1,24 @@
 """Factor registry, values and sampling: one source of truth, clear errors, seeded determinism."""
 
+import ast
 import json
+from pathlib import Path
 
+import draccus
 import numpy as np
 import pytest
 from PIL import Image
 
-from lerobot_factorworld import FACTORS, TASKS, FactorValues, SceneConfig, load_configs, save_configs
-from lerobot_factorworld.assets import split_names
+import lerobot_factorworld
+from lerobot_factorworld import FACTORS, TASKS, FactorValues, SceneConfig, SceneObject, load_configs, save_configs
+from lerobot_factorworld.assets import DEFAULT_TABLE_TEXTURE, asset_family, split_names
+from lerobot_factorworld.factors import registry, sampling, values
 from lerobot_factorworld.factors.registry import (
     PAPER_STUDY_FACTORS,
     factor_range,
     support_matrix,
     support_matrix_markdown,
+    validate_value,
 )
 from lerobot_factorworld.factors.sampling import SamplingOptions, sample_configs, shift_configs
 from lerobot_factorworld.tasks import get_task
@@ -64,6 +70,7 @@ def test_continuous_ranges_follow_the_paper_table():
         (lambda: SamplingOptions(widths={"camera_pos": "huge"}), "valid widths: narrow, medium, wide"),
         (lambda: SamplingOptions(texture_folder="/nonexistent/textures"), "/nonexistent/textures"),
         (lambda: sample_configs("pick-place", 2, split="holdout"), "valid splits: train, eval"),
+        (lambda: SamplingOptions(asset_split="scene"), "valid asset splits: family, variant"),
     ],
 )
 def test_bad_input_gets_a_clear_error(make, fragment):
@@ -132,3 +139,133 @@ def test_rgb_textures_are_drawn_when_asked():
     options = SamplingOptions(rgb_fraction=1.0)
     configs = sample_configs("pick-place", 3, factors=("floor_texture",), options=options)
     assert all(c.factors.floor_texture.startswith("rgb:") for c in configs)
+
+
+def _families(names) -> set[str]:
+    return {asset_family(n) for n in names}
+
+
+def test_default_sampling_and_shifts_hold_whole_families_out():
+    assert SamplingOptions().asset_split == "family"
+    train = sample_configs("pick-place", 20, seed=0, factors=("table_texture", "object_shape"))
+    tests = shift_configs(train, ("table_texture", "object_shape"), 40, seed=1)
+    for factor, kind in (("table_texture", "texture"), ("object_shape", "shape")):
+        seen, shifted = [getattr(c.factors, factor) for c in train], [getattr(c.factors, factor) for c in tests]
+        assert set(seen) <= set(split_names(kind, "train", mode="family"))
+        assert set(shifted) <= set(split_names(kind, "eval", mode="family"))
+        assert not _families(shifted) & _families(split_names(kind, "train"))  # unseen kinds, not new variants
+    # the per-variant split stays selectable, also as a flag (draccus: --sampling.asset_split=variant)
+    variant = draccus.parse(SamplingOptions, args=["--asset_split=variant"])
+    assert variant == SamplingOptions(asset_split="variant")
+    redrawn = shift_configs(train, "table_texture", 40, seed=1, options=variant)
+    assert {c.factors.table_texture for c in redrawn} <= set(split_names("texture", "eval", mode="variant"))
+    assert _families(c.factors.table_texture for c in redrawn) & _families(split_names("texture", "train"))
+
+
+def _flat_texture_folder(root: Path, n: int = 4) -> tuple[tuple[str, ...], tuple[str, ...]]:
+    """n random images (each its own family); returns the folder's (train, eval) names (2 and 2 for n=4)."""
+    root.mkdir()
+    rng = np.random.default_rng(0)
+    for i in range(n):
+        Image.fromarray(rng.integers(0, 255, (8, 8, 3), dtype=np.uint8)).save(root / f"t{i}.png")
+    return split_names("texture", "train", root), split_names("texture", "eval", root)
+
+
+def test_object_texture_never_equals_table_texture(tmp_path, monkeypatch):
+    folder = tmp_path / "textures"
+    train, evals = _flat_texture_folder(folder)
+    options = SamplingOptions(texture_folder=str(folder))
+    both = sample_configs("door-open", 30, seed=3, factors=("object_texture", "table_texture"), options=options)
+    tables = [c.factors.table_texture for c in both]
+    objects_alone = [
+        c.factors.object_texture for c in sample_configs("door-open", 30, 3, "train", ("object_texture",), options)
+    ]
+    assert tables == [
+        c.factors.table_texture for c in sample_configs("door-open", 30, 3, "train", ("table_texture",), options)
+    ]
+    assert sum(o == t for o, t in zip(objects_alone, tables)) >= 5  # drawn alone, they would clash often
+    for config, alone in zip(both, objects_alone):
+        other = next(n for n in train if n != config.factors.table_texture)  # two train textures: the rule decides
+        assert config.factors.object_texture == other
+        assert alone == other or alone == config.factors.table_texture  # only clashing draws changed
+    # the default table (Meta-World's wood) counts too
+    assert DEFAULT_TABLE_TEXTURE in split_names("texture", "train")
+    monkeypatch.setattr(sampling, "DEFAULT_TABLE_TEXTURE", train[0])
+    assert {
+        c.factors.object_texture for c in sample_configs("door-open", 10, 1, "train", ("object_texture",), options)
+    } == {train[1]}
+    monkeypatch.undo()
+    # shifts: the shifted texture avoids the inherited one, which stays exactly as in training
+    for fixed, shifted in (("object_texture", "table_texture"), ("table_texture", "object_texture")):
+        base = [SceneConfig("door-open", FactorValues(**{fixed: name})) for name in evals]
+        out = shift_configs(base, shifted, 10, seed=2, options=options)
+        assert [getattr(c.factors, fixed) for c in out] == [evals[j % 2] for j in range(10)]
+        assert all(c.factors.object_texture != c.factors.table_texture for c in out)
+    pair = shift_configs(both, ("object_texture", "table_texture"), 20, seed=5, options=options)
+    assert all(c.factors.object_texture != c.factors.table_texture for c in pair)
+
+
+def test_object_and_table_textures_differ_in_default_studies():
+    train = sample_configs("pick-place", 100, seed=0)
+    assert all(c.factors.object_texture not in (c.factors.table_texture, None) for c in train)
+    for shift in ("object_texture", "table_texture", ("object_texture", "table_texture")):
+        for split in ("train", "eval"):
+            tests = shift_configs(
+                train, shift, 100, seed=1, split=split, options=SamplingOptions(asset_split="variant")
+            )
+            assert all(c.factors.object_texture != c.factors.table_texture for c in tests)
+
+
+@pytest.mark.parametrize("task", ["pick-place", "basketball", "bin-picking"])
+def test_distractors_never_share_the_task_objects_family(task):
+    family = get_task(task).object_family
+    assert family in _families(split_names("shape", "train"))  # the pool holds look-alikes: the rule drops them
+    for mode in ("family", "variant"):
+        options = SamplingOptions(n_distractors=5, asset_split=mode)
+        train = sample_configs(task, 12, seed=0, factors=("distractors",), options=options)
+        assert train == sample_configs(task, 12, seed=0, factors=("distractors",), options=options)
+        tests = shift_configs(train, "distractors", 12, seed=1, options=options)
+        shapes = [d.shape for c in train + tests for d in c.factors.distractors]
+        assert len(shapes) == 120 and family not in _families(shapes)
+        assert len(_families(shapes)) >= 8
+
+
+def test_distractors_avoid_the_family_of_the_objects_own_shape():
+    options = SamplingOptions(n_distractors=5, asset_split="variant")
+    train = sample_configs("pick-place", 30, seed=2, factors=("object_shape", "distractors"), options=options)
+
+    def clashes(configs):
+        return [
+            c
+            for c in configs
+            if asset_family(c.factors.object_shape) in _families(d.shape for d in c.factors.distractors)
+        ]
+
+    assert not clashes(train)
+    alone = sample_configs("pick-place", 30, seed=2, factors=("distractors",), options=options)
+    assert [c.factors.object_shape for c in train] == [
+        c.factors.object_shape for c in sample_configs("pick-place", 30, 2, "train", ("object_shape",), options)
+    ]
+    mixed = [t.with_factors(distractors=a.factors.distractors) for t, a in zip(train, alone)]
+    assert len(clashes(mixed)) >= 3  # without the rule some would clash
+    # a shifted shape avoids the inherited distractors' families and the other way round
+    for shift in ("object_shape", "distractors"):
+        tests = shift_configs(train, shift, 30, seed=3, split="train", options=options)
+        assert not clashes(tests)
+        kept = "distractors" if shift == "object_shape" else "object_shape"
+        assert [getattr(c.factors, kept) for c in tests] == [getattr(c.factors, kept) for c in train]
+
+
+def test_registry_and_values_import_one_way():
+    """registry <- values <- sampling: no module imports one that imports it (not even inside a function)."""
+
+    def imports(module) -> set[str]:
+        tree = ast.parse(Path(module.__file__).read_text(encoding="utf-8"))
+        return {node.module or "" for node in ast.walk(tree) if isinstance(node, ast.ImportFrom)}
+
+    assert not {"values", "sampling"} & imports(registry)
+    assert "sampling" not in imports(values)
+    assert SceneObject is values.SceneObject is registry.SceneObject is lerobot_factorworld.SceneObject
+    assert (
+        validate_value("distractors", [SceneObject("proc:mug-001", 0.1, 0.1, 0.0, 0.08, "rgb:1,0,0")])[0].size == 0.08
+    )

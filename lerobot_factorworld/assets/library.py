@@ -6,8 +6,13 @@ Names are self-describing strings, so a saved configuration reloads the same ass
 * ``metaworld:<path inside metaworld/assets>``: a file shipped with the installed ``metaworld`` package;
 * ``file:<absolute path>``: a user's own image (.png/.jpg/.jpeg) or mesh (.stl/.obj).
 
-The built-in train/eval splits live in ``asset_splits.json`` (written by ``scripts/make_asset_splits.py``),
-which is the single source of truth; it carries a sha256 of its lists so hand edits are caught at load.
+Every asset belongs to a *family* (:func:`asset_family`): a procedural family, the family a Meta-World
+file looks like, or a user's subfolder. Two train/eval splits exist: ``family`` (the default) holds whole
+families out, so "new" textures and shapes really are new kinds; ``variant`` splits name by name. The
+families the default scenes show (:func:`seen_families`) always go to train.
+
+The built-in splits live in ``asset_splits.json`` (written by ``scripts/make_asset_splits.py``), which is
+the single source of truth; it carries a sha256 of its lists so hand edits are caught at load.
 """
 
 from __future__ import annotations
@@ -34,6 +39,11 @@ AssetKind = Literal["texture", "shape"]
 Split = Literal["train", "eval"]
 KINDS: tuple[str, ...] = get_args(AssetKind)
 SPLITS: tuple[str, ...] = get_args(Split)
+AssetSplitMode = Literal["family", "variant"]
+ASSET_SPLITS: tuple[str, ...] = get_args(AssetSplitMode)
+DEFAULT_ASSET_SPLIT: AssetSplitMode = "family"
+"""``family`` holds whole families out (eval assets are unlike anything in train, as the paper's unseen
+images and scanned objects); ``variant`` splits the pool name by name (eval has new variants of seen families)."""
 
 TEXTURE_EXTENSIONS: tuple[str, ...] = (".png", ".jpg", ".jpeg")
 TRAIN_FRACTION: dict[str, float] = {"texture": 0.5, "shape": 0.6}
@@ -43,71 +53,76 @@ VARIANTS_PER_FAMILY = 12
 SPLITS_SEED = 0
 SPLITS_FILE = Path(__file__).with_name("asset_splits.json")
 
-METAWORLD_TEXTURES: tuple[str, ...] = tuple(
-    f"textures/{f}"
-    for f in (
-        "brick1.png",
-        "darkwood.png",
-        "floor1.png",
-        "floor2.png",
-        "granite.png",
-        "light_wood.png",
-        "light_wood_v2.png",
-        "light_wood_v3.jpeg",
-        "light_wood_v3.png",
-        "marble.png",
-        "metal.png",
-        "metal1.png",
-        "metal2.png",
-        "navy_blue.png",
-        "plaster1.png",
-        "real_door.png",
-        "tennis.png",
-        "wood.png",
-        "wood1.png",
-        "wood2.png",
-        "wood3.png",
-        "wood4.png",
-        "wood_light.png",
-    )
-)
-"""Every texture Meta-World ships (all are visibly different images)."""
+METAWORLD_TEXTURE_FAMILIES: dict[str, str] = {
+    "textures/brick1.png": "bricks",
+    "textures/darkwood.png": "wood",
+    "textures/floor1.png": "grid",  # square floor tiles with grout lines
+    "textures/floor2.png": "grid",
+    "textures/granite.png": "terrazzo",  # stone speckles
+    "textures/light_wood.png": "wood",
+    "textures/light_wood_v2.png": "wood",
+    "textures/light_wood_v3.jpeg": "wood",
+    "textures/light_wood_v3.png": "wood",
+    "textures/marble.png": "marble",
+    "textures/metal.png": "plain",
+    "textures/metal1.png": "plain",
+    "textures/metal2.png": "plain",
+    "textures/navy_blue.png": "plain",
+    "textures/plaster1.png": "plain",
+    "textures/real_door.png": "wood",
+    "textures/tennis.png": "court",
+    "textures/wood.png": "wood",
+    "textures/wood1.png": "wood",
+    "textures/wood2.png": "wood",
+    "textures/wood3.png": "wood",
+    "textures/wood4.png": "wood",
+    "textures/wood_light.png": "wood",
+}
+"""Every texture Meta-World ships (all are visibly different images) -> the family it looks like: a
+procedural family where one matches (its woods are ``wood``), else a Meta-World-only family (``plain``:
+near-uniform metal, plaster and cloth; ``court``: the tennis court)."""
 
-METAWORLD_MESHES: tuple[str, ...] = tuple(
-    f"objects/meshes/{m}.stl"
-    for m in (
-        "assembly_peg/assembly_peg_handle",
-        "assembly_peg/assembly_peg_ring",
-        "basketball/basketballouter",
-        "basketball/hoop",
-        "bin/bin",
-        "block/block",
-        "buttonbox/button",
-        "buttonbox/stopbutton",
-        "coffeemachine/mug",
-        "coffeemachine/spout",
-        "dial/dial",
-        "doorlock/door_handle",
-        "drawer/drawer",
-        "faucet/faucetbase",
-        "faucet/faucethead",
-        "golf_club/club_head",
-        "hammer/hammerhead",
-        "hammer/nail",
-        "handle_press/handle_press_grip",
-        "lever/lever_handle",
-        "lever/lever_rodbase",
-        "peg_block/block_outer",
-        "plug/plug",
-        "plug/plug_head",
-        "puck/puck",
-        "stick/stick",
-        "thermos/therm_base",
-        "thermos/therm_body",
-        "thermos/therm_cap",
-    )
-)
-"""Small, object-like Meta-World meshes (< 2000 faces); fixtures such as the table or robot are left out."""
+METAWORLD_MESH_FAMILIES: dict[str, str] = {
+    "objects/meshes/assembly_peg/assembly_peg_handle.stl": "box",
+    "objects/meshes/assembly_peg/assembly_peg_ring.stl": "torus",
+    "objects/meshes/basketball/basketballouter.stl": "ellipsoid",
+    "objects/meshes/basketball/hoop.stl": "torus",
+    "objects/meshes/bin/bin.stl": "open_box",
+    "objects/meshes/block/block.stl": "box",
+    "objects/meshes/buttonbox/button.stl": "cylinder",
+    "objects/meshes/buttonbox/stopbutton.stl": "cylinder",
+    "objects/meshes/coffeemachine/mug.stl": "bowl",  # a handle-less cup: the bowl family's cup/pot variant
+    "objects/meshes/coffeemachine/spout.stl": "capsule",
+    "objects/meshes/dial/dial.stl": "cylinder",
+    "objects/meshes/doorlock/door_handle.stl": "hardware",
+    "objects/meshes/drawer/drawer.stl": "open_box",
+    "objects/meshes/faucet/faucetbase.stl": "hardware",
+    "objects/meshes/faucet/faucethead.stl": "cylinder",
+    "objects/meshes/golf_club/club_head.stl": "capsule",
+    "objects/meshes/hammer/hammerhead.stl": "hardware",
+    "objects/meshes/hammer/nail.stl": "hardware",
+    "objects/meshes/handle_press/handle_press_grip.stl": "cylinder",
+    "objects/meshes/lever/lever_handle.stl": "ellipsoid",  # a ball
+    "objects/meshes/lever/lever_rodbase.stl": "cylinder",
+    "objects/meshes/peg_block/block_outer.stl": "open_box",
+    "objects/meshes/plug/plug.stl": "hardware",
+    "objects/meshes/plug/plug_head.stl": "cylinder",
+    "objects/meshes/puck/puck.stl": "cylinder",
+    "objects/meshes/stick/stick.stl": "box",
+    "objects/meshes/thermos/therm_base.stl": "cylinder",
+    "objects/meshes/thermos/therm_body.stl": "capsule",
+    "objects/meshes/thermos/therm_cap.stl": "cylinder",
+}
+"""Small, object-like Meta-World meshes (< 2000 faces; fixtures such as the table or robot are left out)
+-> the family they look like: a procedural family where one matches (the puck is a ``cylinder``), else a
+Meta-World-only family (``open_box``: bin, drawer, peg block; ``hardware``: handles, posts, plug, hammer)."""
+
+METAWORLD_TEXTURES: tuple[str, ...] = tuple(METAWORLD_TEXTURE_FAMILIES)
+METAWORLD_MESHES: tuple[str, ...] = tuple(METAWORLD_MESH_FAMILIES)
+
+DEFAULT_TABLE_TEXTURE = "metaworld:textures/wood2.png"
+DEFAULT_FLOOR_TEXTURE = "metaworld:textures/floor2.png"
+"""What Meta-World's default scene shows (``T_table`` and ``T_floor`` in its ``scene/basic_scene*.xml``)."""
 
 _PROC_RE = re.compile(r"^proc:([a-z_]+)-(\d{3})$")
 _NAME_HELP = "expected 'proc:<family>-<NNN>', 'metaworld:<path inside metaworld/assets>' or 'file:<absolute path>'"
@@ -127,6 +142,13 @@ def _check_split(split: str) -> Split:
     if split not in SPLITS:
         raise ValueError(f"unknown split {split!r}; valid splits: {', '.join(SPLITS)}")
     return split  # type: ignore[return-value]
+
+
+def check_asset_split(mode: str) -> AssetSplitMode:
+    """``mode`` if it names an asset split mode, else a ``ValueError`` naming the valid ones."""
+    if mode not in ASSET_SPLITS:
+        raise ValueError(f"unknown asset split {mode!r}; valid asset splits: {', '.join(ASSET_SPLITS)}")
+    return mode  # type: ignore[return-value]
 
 
 def _extensions(kind: AssetKind) -> tuple[str, ...]:
@@ -170,6 +192,43 @@ def _proc_family(name: str) -> str:
             f"texture families: {', '.join(TEXTURE_FAMILIES)}; shape families: {', '.join(SHAPE_FAMILIES)}"
         )
     return family
+
+
+def builtin_families(kind: AssetKind) -> tuple[str, ...]:
+    """Every built-in family of ``kind``: the procedural ones, then the Meta-World-only ones (sorted)."""
+    kind = _check_kind(kind)
+    proc = TEXTURE_FAMILIES if kind == "texture" else SHAPE_FAMILIES
+    shipped = METAWORLD_TEXTURE_FAMILIES if kind == "texture" else METAWORLD_MESH_FAMILIES
+    return proc + tuple(sorted(set(shipped.values()) - set(proc)))
+
+
+def asset_family(name: str, folder: str | Path | None = None) -> str:
+    """The family of an asset: what the family split holds out as a whole, and what "look-alike" means.
+
+    ``proc:`` names: their procedural family; curated Meta-World files: the family they look like
+    (:data:`METAWORLD_TEXTURE_FAMILIES`, :data:`METAWORLD_MESH_FAMILIES`); a file inside ``folder``: its
+    top-level subfolder (one subfolder per family), or the file itself when it lies directly in ``folder``;
+    any other file is a family of its own (its name).
+    """
+    scheme, _, rest = name.partition(":")
+    if scheme == "proc":
+        return _proc_family(name)
+    if scheme == "metaworld":
+        return METAWORLD_TEXTURE_FAMILIES.get(rest) or METAWORLD_MESH_FAMILIES.get(rest) or name
+    if scheme == "file":
+        if folder is None:
+            return name
+        try:
+            rel = Path(rest).relative_to(Path(folder).expanduser().resolve())
+        except ValueError:
+            return name
+        return _folder_family(rel.as_posix())
+    raise ValueError(f"unknown asset name {name!r}; {_NAME_HELP}")
+
+
+def _folder_family(rel: str) -> str:
+    """Family of a file from its path relative to a user folder: the top-level subfolder, else the file."""
+    return rel.split("/", 1)[0]
 
 
 def _file_path(name: str, kind: AssetKind) -> Path:
@@ -261,10 +320,36 @@ def builtin_names(kind: AssetKind) -> tuple[str, ...]:
     return tuple(sorted(names))
 
 
+def seen_families(kind: AssetKind) -> tuple[str, ...]:
+    """Built-in families the default scenes show, which the family split always puts in ``train``.
+
+    A factor a study does not vary keeps its default, so these are seen in training whatever the split:
+    the table's and floor's Meta-World textures, and the families of the tasks' loose objects
+    (:attr:`~lerobot_factorworld.tasks.TaskSpec.object_family`: the puck is a cylinder, ...). Holding them
+    out would put a training look in the evaluation split.
+    """
+    from ..tasks import TASKS
+
+    if _check_kind(kind) == "texture":
+        seen = {asset_family(DEFAULT_TABLE_TEXTURE), asset_family(DEFAULT_FLOOR_TEXTURE)}
+    else:
+        seen = {task.object_family for task in TASKS.values() if task.object_family}
+    return tuple(sorted(seen))
+
+
+def _rank(seed: int, key: str) -> tuple[bytes, str]:
+    """Machine-independent sort key of a seeded permutation: sha256 of ``(seed, key)``."""
+    return hashlib.sha256(f"{seed}\x1f{key}".encode()).digest(), key
+
+
+def _n_train(n: int, kind: AssetKind) -> int:
+    return min(max(round(n * TRAIN_FRACTION[kind]), 1), n - 1)
+
+
 def split_pool(
     names: Sequence[str], kind: AssetKind, seed: int = 0, keys: Sequence[str] | None = None
 ) -> dict[str, tuple[str, ...]]:
-    """Split ``names`` into disjoint, sorted ``train``/``eval`` tuples.
+    """Per-variant split: ``names`` into disjoint, sorted ``train``/``eval`` tuples, item by item.
 
     The seeded permutation ranks items by sha256 of ``(seed, key)`` (``keys`` default to the names), so it
     is identical on every machine and NumPy version, and adding one item never reshuffles the others.
@@ -276,30 +361,110 @@ def split_pool(
     n = len(names)
     if n < 2:
         raise ValueError(f"need at least 2 {kind} assets to make a train/eval split, got {n}")
-    order = sorted(range(n), key=lambda i: (hashlib.sha256(f"{seed}\x1f{keys[i]}".encode()).digest(), keys[i]))
-    n_train = min(max(round(n * TRAIN_FRACTION[kind]), 1), n - 1)
+    order = sorted(range(n), key=lambda i: _rank(seed, keys[i]))
+    n_train = _n_train(n, kind)
     return {
         "train": tuple(sorted(names[i] for i in order[:n_train])),
         "eval": tuple(sorted(names[i] for i in order[n_train:])),
     }
 
 
-def splits_digest(splits: dict[str, dict[str, Sequence[str]]]) -> str:
-    """sha256 of the ``{kind: {split: [names]}}`` lists, as stored in ``asset_splits.json``."""
-    canonical = {k: {s: list(v) for s, v in d.items()} for k, d in splits.items()}
-    return hashlib.sha256(json.dumps(canonical, sort_keys=True, separators=(",", ":")).encode()).hexdigest()
+def split_pool_by_family(
+    names: Sequence[str],
+    families: Sequence[str],
+    kind: AssetKind,
+    seed: int = 0,
+    seen: Sequence[str] = (),
+) -> dict[str, tuple[str, ...]]:
+    """Family split: which families go to ``train`` and which are held out whole in ``eval`` (sorted).
+
+    ``families[i]`` is the family of ``names[i]``. Families in ``seen`` go to ``train`` first; the others
+    follow in a seeded, machine-independent order (sha256 of ``(seed, family)``, so adding a family never
+    reshuffles the rest) until ``train`` holds :data:`TRAIN_FRACTION` of the names; the rest, at least one
+    family, is held out.
+    """
+    kind = _check_kind(kind)
+    if len(families) != len(names):
+        raise ValueError("families must match the names one to one")
+    sizes: dict[str, int] = {}
+    for family in families:
+        sizes[family] = sizes.get(family, 0) + 1
+    if len(sizes) < 2:
+        raise ValueError(
+            f"need at least 2 {kind} families to hold whole families out, got {len(sizes)} "
+            f"({', '.join(sizes) or 'none'}); put the files in subfolders, one per family, or use the "
+            "per-variant split (asset_split=variant)"
+        )
+    first = sorted(set(seen) & set(sizes))
+    order = first + sorted(set(sizes) - set(first), key=lambda f: _rank(seed, f))
+    target, count, train = _n_train(len(names), kind), 0, []
+    for family in order:
+        if (count >= target and family not in first) or len(train) == len(order) - 1:
+            break
+        train.append(family)
+        count += sizes[family]
+    return {"train": tuple(sorted(train)), "eval": tuple(sorted(set(order) - set(train)))}
+
+
+def _split_by_family(
+    names: Sequence[str], families: Sequence[str], kind: AssetKind, seed: int, seen: Sequence[str] = ()
+) -> tuple[dict[str, tuple[str, ...]], dict[str, tuple[str, ...]]]:
+    """(names per split, families per split) of the family split."""
+    by_split = split_pool_by_family(names, families, kind, seed, seen)
+    train = set(by_split["train"])
+    return {
+        "train": tuple(sorted(n for n, f in zip(names, families, strict=True) if f in train)),
+        "eval": tuple(sorted(n for n, f in zip(names, families, strict=True) if f not in train)),
+    }, by_split
+
+
+def _builtin_split(mode: AssetSplitMode, kind: AssetKind, seed: int) -> dict[str, dict[str, tuple[str, ...]]]:
+    """``{"names": {split: names}, "families": {split: families}}`` of the built-in pool, computed."""
+    names = builtin_names(kind)
+    families = [asset_family(n) for n in names]
+    if mode == "variant":
+        return _variant_lists(names, families, split_pool(names, kind, seed))
+    by_name, by_family = _split_by_family(names, families, kind, seed, seen_families(kind))
+    return {"names": by_name, "families": by_family}
+
+
+def _variant_lists(
+    names: Sequence[str], families: Sequence[str], by_name: dict[str, tuple[str, ...]]
+) -> dict[str, dict[str, tuple[str, ...]]]:
+    """The per-variant split's names and the families each side draws from (mostly the same ones)."""
+    family = dict(zip(names, families, strict=True))
+    by_family = {s: tuple(sorted({family[n] for n in by_name[s]})) for s in SPLITS}
+    return {"names": by_name, "families": by_family}
+
+
+def splits_digest(lists: dict[str, Any]) -> str:
+    """sha256 of the split lists (``{mode: {kind: {"names": {split: [..]}, "families": {split: [..]}}}}``),
+    as stored in ``asset_splits.json``."""
+    return hashlib.sha256(json.dumps(_jsonable(lists), sort_keys=True, separators=(",", ":")).encode()).hexdigest()
+
+
+def _jsonable(value: Any) -> Any:
+    if isinstance(value, dict):
+        return {k: _jsonable(v) for k, v in value.items()}
+    if isinstance(value, (tuple, list)):
+        return [_jsonable(v) for v in value]
+    return value
 
 
 def builtin_splits_document(seed: int = SPLITS_SEED) -> dict[str, Any]:
-    """The content of ``asset_splits.json``: recomputed from the code's built-in pools."""
-    splits = {kind: dict(split_pool(builtin_names(kind), kind, seed)) for kind in KINDS}  # type: ignore[arg-type]
+    """The content of ``asset_splits.json``: both split modes, recomputed from the code's built-in pools."""
+    lists = {mode: {kind: _builtin_split(mode, kind, seed) for kind in KINDS} for mode in ASSET_SPLITS}  # type: ignore[arg-type]
     return {
         "generator": "scripts/make_asset_splits.py",
         "seed": seed,
         "train_fraction": dict(TRAIN_FRACTION),
-        "counts": {k: {s: len(v) for s, v in d.items()} for k, d in splits.items()},
-        "splits": {k: {s: list(v) for s, v in d.items()} for k, d in splits.items()},
-        "sha256": splits_digest(splits),
+        "seen_families": {kind: list(seen_families(kind)) for kind in KINDS},  # type: ignore[arg-type]
+        "counts": {
+            mode: {kind: {s: len(d["names"][s]) for s in SPLITS} for kind, d in by_kind.items()}
+            for mode, by_kind in lists.items()
+        },
+        "splits": _jsonable(lists),
+        "sha256": splits_digest(lists),
     }
 
 
@@ -308,24 +473,34 @@ class AssetSplitsError(RuntimeError):
 
 
 @functools.lru_cache(maxsize=1)
-def _builtin_splits() -> dict[str, dict[str, tuple[str, ...]]]:
+def _builtin_splits() -> dict[str, dict[str, dict[str, dict[str, tuple[str, ...]]]]]:
     regen = "regenerate it with `python scripts/make_asset_splits.py`"
     try:
         doc = json.loads(SPLITS_FILE.read_text(encoding="utf-8"))
         raw = doc["splits"]
-        splits = {k: {s: tuple(raw[k][s]) for s in SPLITS} for k in KINDS}
+        lists = {
+            mode: {
+                kind: {part: {s: tuple(raw[mode][kind][part][s]) for s in SPLITS} for part in ("names", "families")}
+                for kind in KINDS
+            }
+            for mode in ASSET_SPLITS
+        }
         stored = doc["sha256"]
     except (OSError, ValueError, KeyError, TypeError) as exc:
         raise AssetSplitsError(f"cannot read built-in splits from {SPLITS_FILE} ({exc}); {regen}") from exc
-    if splits_digest(splits) != stored:
+    if splits_digest(lists) != stored:
         raise AssetSplitsError(
             f"{SPLITS_FILE} does not match its sha256 (edited by hand?); built-in splits must come from the "
             f"script: {regen}"
         )
-    for kind, d in splits.items():
-        if set(d["train"]) & set(d["eval"]):
-            raise AssetSplitsError(f"{SPLITS_FILE}: {kind} train and eval overlap; {regen}")
-    return splits
+    for mode, by_kind in lists.items():
+        for kind, d in by_kind.items():
+            if set(d["names"]["train"]) & set(d["names"]["eval"]):
+                raise AssetSplitsError(f"{SPLITS_FILE}: {mode} split of {kind}s: train and eval overlap; {regen}")
+            misplaced = any(asset_family(n) not in d["families"][s] for s in SPLITS for n in d["names"][s])
+            if mode == "family" and (misplaced or set(d["families"]["train"]) & set(d["families"]["eval"])):
+                raise AssetSplitsError(f"{SPLITS_FILE}: a {kind} family is on both sides of the family split; {regen}")
+    return lists
 
 
 def _folder_files(kind: AssetKind, folder: str | Path) -> list[tuple[str, str]]:
@@ -353,18 +528,62 @@ def folder_names(kind: AssetKind, folder: str | Path) -> tuple[str, ...]:
     return tuple(name for _, name in _folder_files(_check_kind(kind), folder))
 
 
-def split_names(kind: AssetKind, split: Split, folder: str | Path | None = None, seed: int = 0) -> tuple[str, ...]:
-    """Asset names of one split, sorted.
-
-    Without ``folder`` the built-in split is read from ``asset_splits.json`` (for ``seed == 0``; another
-    seed re-splits the built-in pool with the same function). With ``folder`` the same split function runs
-    on the folder's files, keyed by their relative paths, so a copied folder splits identically anywhere.
-    """
+def asset_families(kind: AssetKind, folder: str | Path | None = None) -> dict[str, str]:
+    """Name -> family of every asset in the built-in pool, or in ``folder`` (see :func:`asset_family`)."""
     kind = _check_kind(kind)
-    split = _check_split(split)
+    if folder is None:
+        return dict(_builtin_families_of(kind))
+    return {name: _folder_family(rel) for rel, name in _folder_files(kind, folder)}
+
+
+@functools.lru_cache(maxsize=2)
+def _builtin_families_of(kind: AssetKind) -> tuple[tuple[str, str], ...]:
+    return tuple((name, asset_family(name)) for name in builtin_names(kind))
+
+
+def _split_lists(
+    kind: AssetKind, folder: str | Path | None, seed: int, mode: AssetSplitMode
+) -> dict[str, dict[str, tuple[str, ...]]]:
     if folder is None:
         if seed == SPLITS_SEED:
-            return _builtin_splits()[kind][split]
-        return split_pool(builtin_names(kind), kind, seed)[split]
+            return _builtin_splits()[mode][kind]
+        return _builtin_split(mode, kind, seed)
     files = _folder_files(kind, folder)
-    return split_pool([n for _, n in files], kind, seed, keys=[r for r, _ in files])[split]
+    names, rels = [n for _, n in files], [r for r, _ in files]
+    families = [_folder_family(r) for r in rels]
+    if mode == "variant":
+        return _variant_lists(names, families, split_pool(names, kind, seed, keys=rels))
+    by_name, by_family = _split_by_family(names, families, kind, seed)
+    return {"names": by_name, "families": by_family}
+
+
+def split_names(
+    kind: AssetKind,
+    split: Split,
+    folder: str | Path | None = None,
+    seed: int = 0,
+    mode: AssetSplitMode = DEFAULT_ASSET_SPLIT,
+) -> tuple[str, ...]:
+    """Asset names of one split, sorted.
+
+    ``mode="family"`` (the default) holds whole families out; ``"variant"`` splits name by name. Without
+    ``folder`` the built-in split is read from ``asset_splits.json`` (for ``seed == 0``; another seed
+    re-splits the built-in pool with the same function). With ``folder`` the same split function runs on
+    the folder's files, keyed by their relative paths (a top-level subfolder is a family), so a copied
+    folder splits identically anywhere.
+    """
+    kind, split, mode = _check_kind(kind), _check_split(split), check_asset_split(mode)
+    return _split_lists(kind, folder, seed, mode)["names"][split]
+
+
+def split_families(
+    kind: AssetKind,
+    split: Split,
+    folder: str | Path | None = None,
+    seed: int = 0,
+    mode: AssetSplitMode = DEFAULT_ASSET_SPLIT,
+) -> tuple[str, ...]:
+    """The families that :func:`split_names` draws from for the same arguments (sorted). In the family
+    split the two sides share none; in the per-variant split most families are on both sides."""
+    kind, split, mode = _check_kind(kind), _check_split(split), check_asset_split(mode)
+    return _split_lists(kind, folder, seed, mode)["families"][split]

@@ -12,7 +12,7 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from typing import Any, Literal
 
-from ..tasks import TASKS, TaskSpec
+from ..tasks import TASKS, TaskSpec, get_task
 
 SPLITS = ("train", "eval")
 WIDTHS = ("narrow", "medium", "wide")
@@ -96,6 +96,25 @@ def _reshapeable_only(task: TaskSpec) -> str | None:
 DISTRACTOR_AREA = _box((-0.6, 0.6), (-0.33, 0.33))
 DISTRACTOR_SIZE = (0.05, 0.12)
 MAX_DISTRACTORS = 5
+
+
+@dataclass(frozen=True)
+class SceneObject:
+    """A rigid object standing on the table: a distractor (or, for multi-object tasks, a named item).
+
+    Positions are in the table frame (metres from the table centre), so objects move with the table.
+    Defined here, next to the area and sizes it is validated against, so that the registry needs no
+    value module (:mod:`.values` re-exports it).
+    """
+
+    shape: str
+    x: float
+    y: float
+    yaw: float
+    size: float
+    texture: str
+    name: str = ""
+
 
 FACTORS: dict[str, FactorSpec] = {
     spec.name: spec
@@ -225,8 +244,6 @@ def check_factor_names(names: Mapping[str, Any] | list[str] | tuple[str, ...]) -
 
 def support_reason(factor: str, task: str | TaskSpec) -> str | None:
     """``None`` if ``factor`` applies to ``task``, else why it does not."""
-    from ..tasks import get_task
-
     spec = get_factor(factor)
     return spec.applies(task if isinstance(task, TaskSpec) else get_task(task))
 
@@ -347,8 +364,6 @@ def format_rgb(rgb: tuple[float, float, float]) -> str:
 
 
 def _validate_objects(value: Any) -> tuple:
-    from .values import SceneObject
-
     items = tuple(value)
     if len(items) > MAX_DISTRACTORS:
         raise ValueError(f"at most {MAX_DISTRACTORS} distractors are supported, got {len(items)}")

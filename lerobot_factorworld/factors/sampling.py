@@ -1,17 +1,25 @@
 """Seeded sampling of factor values and environment configurations (train environments, shifted tests).
 
-Each factor draws from its own child RNG (``[seed, split, factor]``), so adding a factor to a study
-never changes the values other factors get, and the same seeds always give the same configurations.
+Each factor draws from its own child RNG (``[seed, split, factor]``), so the same seeds always give the
+same configurations and adding a factor to a study never changes the values other factors get, except
+where two rules tie factors of one environment together: the object texture never equals the table
+texture (as in the public Factor World), and no distractor comes from the shape family of the task's
+object (no look-alike of it). A value that would break a rule is replaced without drawing again (see
+:func:`_draw`), so a rule changes only that value and never shifts any RNG stream.
 """
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Sequence
+import functools
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
+from ..assets import DEFAULT_ASSET_SPLIT, DEFAULT_TABLE_TEXTURE, asset_family, check_asset_split
+from ..assets import split_names as asset_split_names
 from ..tasks import TaskSpec, get_task
 from .registry import (
     DISTRACTOR_AREA,
@@ -20,13 +28,14 @@ from .registry import (
     MAX_DISTRACTORS,
     PAPER_STUDY_FACTORS,
     SPLITS,
+    SceneObject,
     check_factor_names,
     check_task_support,
     factor_range,
     format_rgb,
     get_factor,
 )
-from .values import FactorValues, SceneConfig, SceneObject
+from .values import FactorValues, SceneConfig
 
 MAX_PLACEMENT_TRIES = 2000
 
@@ -41,6 +50,10 @@ class SamplingOptions:
         shape_folder: A folder of meshes (.stl/.obj) to draw object shapes and distractors from.
         rgb_fraction: Probability that a texture draw is a flat RGB colour instead of an image.
         n_distractors: Number of distractor objects per environment.
+        asset_split: How assets are split between train and eval: ``family`` (default) holds whole
+            families out, so test textures and shapes are unlike any training one (the paper's unseen
+            images and objects); ``variant`` splits name by name (new variants of seen families). In a
+            folder, a top-level subfolder is a family.
     """
 
     widths: dict[str, str] = field(default_factory=dict)
@@ -48,8 +61,10 @@ class SamplingOptions:
     shape_folder: str | None = None
     rgb_fraction: float = 0.0
     n_distractors: int = 1
+    asset_split: str = DEFAULT_ASSET_SPLIT
 
     def __post_init__(self) -> None:
+        check_asset_split(self.asset_split)
         check_factor_names(self.widths)
         for name, width in self.widths.items():
             get_factor(name).range(width)  # raises naming the valid widths
@@ -72,9 +87,26 @@ def sample_factor(
     rng: np.random.Generator,
     split: str = "train",
     options: SamplingOptions | None = None,
+    scene: Mapping[str, Any] | None = None,
 ):
-    """Draw one value of factor ``name`` for ``task`` from ``split``."""
+    """Draw one value of factor ``name`` for ``task`` from ``split``.
+
+    ``scene`` holds the environment's other factor values that are already fixed (drawn before, or
+    inherited from a training environment): the drawn value obeys the rules between factors against them.
+    """
     options = options or SamplingOptions()
+    return _sample(name, task, rng, split, options, scene or {}, _Pools(split, options))
+
+
+def _sample(
+    name: str,
+    task: str | TaskSpec,
+    rng: np.random.Generator,
+    split: str,
+    options: SamplingOptions,
+    scene: Mapping[str, Any],
+    pools: _Pools,
+):
     task = task if isinstance(task, TaskSpec) else get_task(task)
     spec = get_factor(name)
     check_task_support(task, [name])
@@ -83,11 +115,17 @@ def sample_factor(
         low, high = factor_range(task, name, options.widths.get(name))
         value = tuple(float(v) for v in rng.uniform(low, high))
         return value[0] if spec.kind == "scalar" else value
-    if spec.kind == "asset":
-        if spec.asset_kind == "texture":
-            return _sample_texture(rng, split, options)
-        return _choice(rng, _shape_pool(split, options))
-    return _sample_distractors(task, rng, split, options)
+    if name == "object_texture":
+        table = scene.get("table_texture") or DEFAULT_TABLE_TEXTURE
+        return _sample_texture(rng, pools.texture, options, avoid=table)
+    if name in ("table_texture", "floor_texture"):
+        avoid = scene.get("object_texture") if name == "table_texture" else None
+        return _sample_texture(rng, pools.texture, options, avoid=avoid)
+    if name == "object_shape":
+        shapes = pools.shape
+        taken = {shapes.family_of(item.shape) for item in scene.get("distractors") or ()}
+        return _draw(rng, shapes, lambda shape: shapes.family_of(shape) not in taken, "object shape")
+    return _sample_distractors(task, rng, options, scene, pools)
 
 
 def sample_factor_values(
@@ -97,15 +135,28 @@ def sample_factor_values(
     seed: int,
     split: str = "train",
     options: SamplingOptions | None = None,
+    base: Sequence[FactorValues] | None = None,
 ) -> list[FactorValues]:
-    """``n`` factor-value sets varying ``factors`` (the others stay at the default scene)."""
+    """``n`` factor-value sets varying ``factors``; the others stay at the default scene, or, with ``base``,
+    at the values of ``base[i % len(base)]``, which the rules between factors then respect."""
     factors = tuple(factors)
     check_factor_names(factors)
-    columns = {}
-    for name in factors:
+    options = options or SamplingOptions()
+    pools = _Pools(split, options)
+    scenes: list[dict[str, Any]] = [
+        {k: v for k, v in (base[i % len(base)].non_default() if base else {}).items() if k not in factors}
+        for i in range(n)
+    ]
+    for name in sorted(factors, key=lambda f: (f not in _DRAWN_FIRST, list(FACTORS).index(f))):
         rng = factor_rng(seed, split, name)
-        columns[name] = [sample_factor(name, task, rng, split, options) for _ in range(n)]
-    return [FactorValues(**{name: columns[name][i] for name in factors}) for i in range(n)]
+        for scene in scenes:
+            scene[name] = _sample(name, task, rng, split, options, scene, pools)
+    return [FactorValues(**{name: scene[name] for name in factors}) for scene in scenes]
+
+
+_DRAWN_FIRST = ("table_texture", "object_shape")
+"""Factors that a rule of another factor reads (object texture vs table texture, distractors vs object
+shape) are drawn first. Each factor keeps its own RNG, so the order changes no stream."""
 
 
 def sample_configs(
@@ -135,14 +186,15 @@ def shift_configs(
     """Test environments: training environments with ``factors`` (one or a pair) given new values.
 
     Environment ``j`` copies ``base[j % len(base)]`` and replaces the shifted factors with draws from
-    ``split`` (the held-out asset split by default), as in the paper's protocol.
+    ``split`` (the held-out asset split by default), as in the paper's protocol. The inherited factors are
+    kept exactly; a shifted value obeys the rules between factors against them.
     """
     factors = (factors,) if isinstance(factors, str) else tuple(factors)
     if not base:
         raise ValueError("shift_configs needs at least one base configuration")
     task = get_task(base[0].task)
     tag = "+".join(factors)
-    new_values = sample_factor_values(task, factors, n, seed, split, options)
+    new_values = sample_factor_values(task, factors, n, seed, split, options, base=[c.factors for c in base])
     out = []
     for j, values in enumerate(new_values):
         parent = base[j % len(base)]
@@ -157,39 +209,78 @@ def _check_split(split: str) -> str:
     return split
 
 
-def _choice(rng: np.random.Generator, pool: tuple[str, ...]) -> str:
-    return pool[int(rng.integers(len(pool)))]
+@dataclass(frozen=True)
+class _Pool:
+    """The asset names of one split and the family of each (for the look-alike rule)."""
+
+    kind: str
+    names: tuple[str, ...]
+    families: Mapping[str, str]
+
+    @classmethod
+    def of(cls, kind: str, split: str, options: SamplingOptions) -> _Pool:
+        folder = options.texture_folder if kind == "texture" else options.shape_folder
+        names = asset_split_names(kind, split, folder, mode=options.asset_split)  # type: ignore[arg-type]
+        return cls(kind, names, {name: asset_family(name, folder) for name in names})
+
+    def family_of(self, name: str) -> str:
+        """Family of a pool name, or of any other asset (e.g. one inherited from a hand-made config)."""
+        return self.families.get(name) or asset_family(name)
 
 
-def _texture_pool(split: str, options: SamplingOptions) -> tuple[str, ...]:
-    from ..assets import split_names
+class _Pools:
+    """The texture and shape pools of one split, resolved once per sampling call (a folder is scanned once)."""
 
-    return split_names("texture", split, options.texture_folder)
+    def __init__(self, split: str, options: SamplingOptions) -> None:
+        self.split, self.options = split, options
+
+    @functools.cached_property
+    def texture(self) -> _Pool:
+        return _Pool.of("texture", self.split, self.options)
+
+    @functools.cached_property
+    def shape(self) -> _Pool:
+        return _Pool.of("shape", self.split, self.options)
 
 
-def _shape_pool(split: str, options: SamplingOptions) -> tuple[str, ...]:
-    from ..assets import split_names
+def _draw(rng: np.random.Generator, pool: _Pool, allowed: Callable[[str], bool], what: str) -> str:
+    """One uniform draw from ``pool``; a name that breaks a rule is replaced without drawing again.
 
-    return split_names("shape", split, options.shape_folder)
+    The draw always consumes the same random numbers, so a rule changes only the value that broke it
+    and never the stream of later draws; the replacement (the ``k``-th allowed name, modulo) spreads
+    the excluded names' probability evenly over the allowed ones.
+    """
+    k = int(rng.integers(len(pool.names)))
+    if allowed(pool.names[k]):
+        return pool.names[k]
+    ok = [name for name in pool.names if allowed(name)]
+    if not ok:
+        raise ValueError(f"no {what} in the {pool.kind} pool obeys the rules between factors (all excluded)")
+    return ok[k % len(ok)]
 
 
-def _sample_texture(rng: np.random.Generator, split: str, options: SamplingOptions) -> str:
+def _sample_texture(rng: np.random.Generator, pool: _Pool, options: SamplingOptions, avoid: str | None) -> str:
     # Always draw both numbers so the RNG stream does not depend on rgb_fraction's outcome.
     use_rgb = rng.random() < options.rgb_fraction
-    rgb = rng.random(3)
-    name = _choice(rng, _texture_pool(split, options))
-    return format_rgb(tuple(rgb)) if use_rgb else name
+    rgb = format_rgb(tuple(rng.random(3)))
+    name = _draw(rng, pool, lambda texture: texture != avoid, "texture")
+    return rgb if use_rgb and rgb != avoid else name
 
 
-def _sample_distractors(task: TaskSpec, rng, split: str, options: SamplingOptions) -> tuple[SceneObject, ...]:
+def _sample_distractors(
+    task: TaskSpec, rng: np.random.Generator, options: SamplingOptions, scene: Mapping[str, Any], pools: _Pools
+) -> tuple[SceneObject, ...]:
     from ..scene.layout import keepout_boxes
 
+    shapes, textures = pools.shape, pools.texture
+    own_shape = scene.get("object_shape")
+    lookalike = shapes.family_of(own_shape) if own_shape else task.object_family
     blocked = [tuple(b) for b in keepout_boxes(task.name)]
     (xlo, ylo), (xhi, yhi) = DISTRACTOR_AREA
     items = []
     for _ in range(options.n_distractors):
-        shape = _choice(rng, _shape_pool(split, options))
-        texture = _sample_texture(rng, split, options)
+        shape = _draw(rng, shapes, lambda name: shapes.family_of(name) != lookalike, "distractor shape")
+        texture = _sample_texture(rng, textures, options, avoid=None)
         size = float(rng.uniform(*DISTRACTOR_SIZE))
         yaw = float(rng.uniform(0.0, 2 * np.pi))
         half = size / 2

@@ -8,28 +8,24 @@ episode from the reset seed, as in the paper).
 from __future__ import annotations
 
 import json
-from dataclasses import asdict, dataclass, field, fields, replace
+from dataclasses import asdict, dataclass, field, fields, is_dataclass, replace
 from pathlib import Path
 from typing import Any
 
+from ..tasks import get_task
+from .registry import SPLITS, SceneObject, check_factor_names, check_task_support, validate_value
+
+__all__ = [
+    "FactorValues",
+    "SceneConfig",
+    "SceneObject",
+    "load_configs",
+    "save_configs",
+    "to_jsonable",
+]
+
 Vec2 = tuple[float, float]
 Vec3 = tuple[float, float, float]
-
-
-@dataclass(frozen=True)
-class SceneObject:
-    """A rigid object standing on the table: a distractor (or, for multi-object tasks, a named item).
-
-    Positions are in the table frame (metres from the table centre), so objects move with the table.
-    """
-
-    shape: str
-    x: float
-    y: float
-    yaw: float
-    size: float
-    texture: str
-    name: str = ""
 
 
 @dataclass(frozen=True)
@@ -49,8 +45,6 @@ class FactorValues:
     distractors: tuple[SceneObject, ...] | None = None
 
     def __post_init__(self) -> None:
-        from .registry import validate_value
-
         for f in fields(self):
             value = getattr(self, f.name)
             if value is None:
@@ -59,8 +53,6 @@ class FactorValues:
 
     def set(self, **values: Any) -> FactorValues:
         """A copy with some factors replaced (validated like the constructor)."""
-        from .registry import check_factor_names
-
         check_factor_names(values)
         return replace(self, **values)
 
@@ -73,8 +65,6 @@ class FactorValues:
 
     @classmethod
     def from_dict(cls, data: dict[str, Any]) -> FactorValues:
-        from .registry import check_factor_names
-
         check_factor_names(data)
         values = dict(data)
         if values.get("distractors") is not None:
@@ -103,9 +93,6 @@ class SceneConfig:
     env_id: str = ""
 
     def __post_init__(self) -> None:
-        from ..tasks import get_task
-        from .registry import SPLITS, check_task_support
-
         task = get_task(self.task)
         object.__setattr__(self, "task", task.name)
         if self.split not in SPLITS:
@@ -116,8 +103,6 @@ class SceneConfig:
 
     @property
     def task_description(self) -> str:
-        from ..tasks import get_task
-
         return self.instruction or get_task(self.task).instruction
 
     def with_factors(self, **values: Any) -> SceneConfig:
@@ -175,8 +160,6 @@ def load_configs(path: str | Path) -> list[SceneConfig]:
 
 def to_jsonable(value: Any) -> Any:
     """Tuples -> lists and dataclasses (``SceneObject``) -> dicts, recursively."""
-    from dataclasses import is_dataclass
-
     if is_dataclass(value):
         value = asdict(value)
     if isinstance(value, (tuple, list)):
