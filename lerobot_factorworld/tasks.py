@@ -29,6 +29,13 @@ class TaskSpec:
         limits: Per-factor boxes ``(factor, (low, high))`` where this task stays solvable by its
             scripted expert (bin walls, reach, the hoop's size); the factor's ranges are intersected
             with them and explicit values outside them are rejected.
+        object_family: The shape family (:func:`lerobot_factorworld.assets.asset_family`) the loose
+            object looks like: no distractor is drawn from it, and the family split keeps it in train
+            (the default scene shows it). Empty for fixtures, which no table-top shape resembles.
+        goal: A fixed goal position (world frame, which is the table's) replacing the one Meta-World
+            samples; ``None`` keeps Meta-World's goal at the centre of its range.
+        success_radius: Object-to-goal distance (metres) that counts as success, replacing Meta-World's
+            threshold; only for tasks whose success test is ``obj_to_target <= radius``.
     """
 
     name: str
@@ -39,6 +46,9 @@ class TaskSpec:
     nominal_object_xy: tuple[float, float] | None = None
     reshapeable: bool = False
     limits: tuple[tuple[str, tuple[tuple[float, ...], tuple[float, ...]]], ...] = ()
+    object_family: str = ""
+    goal: tuple[float, float, float] | None = None
+    success_radius: float | None = None
 
     def limit(self, factor: str) -> tuple[tuple[float, ...], tuple[float, ...]] | None:
         return dict(self.limits).get(factor)
@@ -60,6 +70,12 @@ _ROWS = (
         True,
         nominal_object_xy=(0.0, 0.6),
         reshapeable=True,
+        object_family="cylinder",  # the puck
+        # The public Factor World's pick-place: the goal lies on the table in front of the puck (where a
+        # goal-blind scripted policy ends up) and success is within 3 cm; Meta-World's goal floats in the
+        # air at y 0.8..0.9 with a 7 cm radius.
+        goal=(-0.005, 0.40, 0.02),
+        success_radius=0.03,
     ),
     TaskSpec(
         "basketball",
@@ -68,6 +84,7 @@ _ROWS = (
         True,
         nominal_object_xy=(0.0, 0.6),
         limits=(("object_size", ((0.7,), (1.1,))),),
+        object_family="ellipsoid",  # a ball
     ),
     TaskSpec(
         "bin-picking",
@@ -75,6 +92,7 @@ _ROWS = (
         ("obj",),
         True,
         limits=(("object_pos", ((-0.05, -0.04), (0.05, 0.04))), ("object_size", ((0.8,), (1.3,)))),
+        object_family="box",  # a cube
     ),
     TaskSpec("button-press", "press the button from the front", ("box",)),
     TaskSpec("button-press-topdown", "press the button from the top", ("box",)),

@@ -7,6 +7,7 @@ from gymnasium.utils.env_checker import check_env
 
 import lerobot_factorworld  # noqa: F401  (registers FactorWorld/<task>-v0)
 from lerobot_factorworld import TASKS, FactorValues, SceneConfig
+from lerobot_factorworld.experts import expert_action, expert_policy
 from lerobot_factorworld.factors.sampling import sample_configs
 
 
@@ -86,3 +87,54 @@ def test_bad_reset_options(make_env):
     with pytest.raises(ValueError, match="out of range"):
         env.reset(options={"env_index": 3})
     env.reset(options={"lerobot_new_rollout": True})  # LeRobot's rollout flag is accepted
+
+
+def test_agent_pos_is_in_the_robot_frame_under_a_table_shift(make_env):
+    """The table factor moves the robot side by -delta; the robot's readings must see the table move by +delta."""
+    delta = np.array([0.02, -0.03, -0.04])
+    pinned = FactorValues(object_pos=(0.02, -0.01))
+    policy = expert_policy("pick-place")
+    runs = []
+    for values in (pinned, pinned.set(table_pos=tuple(delta))):
+        env = make_env("pick-place", SceneConfig("pick-place", values), image_size=32)
+        obs, _ = env.reset(seed=0)
+        # the hand relative to the robot base, whatever the base's world position
+        hand = env.data.body("hand").xpos - env.data.body("base").xpos
+        assert np.allclose(obs["agent_pos"][[0, 1, 2, 4, 5, 6]], np.tile(hand, 2), atol=1e-6)
+        run = {"agent_pos": [obs["agent_pos"]], "pixels": obs["pixels"]["front"], "state": env.state_observation}
+        for _ in range(150):
+            previous = obs["agent_pos"]
+            obs, _, terminated, _, info = env.step(expert_action(policy, env.state_observation))
+            assert np.array_equal(obs["agent_pos"][4:], previous[:4])  # the previous-step half, same frame
+            run["agent_pos"].append(obs["agent_pos"])
+            if terminated:
+                break
+        run["success"] = info["is_success"]
+        runs.append(run)
+    default, shifted = runs
+    expected = np.concatenate([delta, [0.0], delta, [0.0]])
+    assert np.allclose(shifted["agent_pos"][0] - default["agent_pos"][0], expected, atol=1e-3)
+    n = min(len(default["agent_pos"]), len(shifted["agent_pos"]))
+    assert np.allclose(np.array(shifted["agent_pos"][:n]) - np.array(default["agent_pos"][:n]), expected, atol=0.01)
+    # the task itself is unchanged on the table (Meta-World's state is in the table frame) and still solved ...
+    assert np.allclose(shifted["state"][4:7], default["state"][4:7]) and shifted["success"] and default["success"]
+    # ... while the cameras, which move with the robot, see the table shift
+    assert np.abs(shifted["pixels"].astype(int) - default["pixels"].astype(int)).max() > 10
+
+
+def test_pick_place_is_the_public_factor_world_definition(make_env):
+    """Goal fixed on the table at (-0.005, 0.40, 0.02), success within 3 cm (Meta-World: in the air, 7 cm)."""
+    goal = np.array([-0.005, 0.40, 0.02])
+    env = make_env("pick-place", cameras=())
+    for seed in range(3):
+        env.reset(seed=seed)
+        assert np.allclose(env.state_observation[36:39], goal)  # the goal scripted experts read
+        assert np.allclose(env.model.site("goal").pos, goal) and np.allclose(env.data.site("goal").xpos, goal)
+    for offset, solved in ((0.025, True), (0.035, False)):
+        env.reset(seed=0)
+        puck = env.data.joint("objjoint")  # put the puck on the table beside the goal
+        puck.qpos[:3], puck.qvel[:] = goal + np.array([offset, 0.0, 0.0]), 0.0
+        obs, reward, terminated, _, info = env.step(np.zeros(4, np.float32))
+        assert info["is_success"] is solved and terminated is solved and reward == float(solved)
+        assert np.allclose(env.state_observation[36:39], goal)  # not clipped to Meta-World's goal space
+    assert 0.03 < np.linalg.norm(env.state_observation[4:7] - goal) < 0.07  # Meta-World's radius would count it

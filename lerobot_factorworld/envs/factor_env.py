@@ -7,7 +7,10 @@ Description:
 
 Observation space:
     ``pixels``: dict camera -> uint8 (H, W, 3); ``agent_pos``: float32 (8,) = gripper position and
-    finger opening at the current and at the previous step (the paper's proprioception).
+    finger opening at the current and at the previous step (the paper's proprioception), positions
+    in the robot's frame: under a table shift they move by ``table_pos`` as if the table had moved
+    (:func:`lerobot_factorworld.scene.build.robot_frame_offset`); the state vector scripted experts
+    read (``state_observation``) stays in Meta-World's world frame, which is the table's.
     ``cameras=()`` gives a physics-only env without ``pixels`` (scripted experts, physics tests).
 
 Action space:
@@ -44,6 +47,7 @@ from ..factors.values import FactorValues, SceneConfig, to_jsonable
 from ..scene.build import DEFAULT_HEADLIGHT, QUALITIES, Quality
 from ..scene.cameras import DEFAULT_CAMERAS, check_camera_names
 from ..tasks import get_task
+from ..validation import check_image_size
 
 PER_EPISODE_FACTORS = ("object_pos", "arm_pos")  # applied at reset; everything else is compiled in
 RESERVED_OPTION_PREFIX = "lerobot_"  # LeRobot's rollout passes {"lerobot_new_rollout": True}
@@ -82,8 +86,7 @@ class FactorWorldEnv(gym.Env):
         if not self.cameras:
             render_mode = None
         self.image_size = (image_size, image_size) if isinstance(image_size, int) else tuple(image_size)
-        if min(self.image_size) < 8:
-            raise ValueError(f"image_size must be at least 8 pixels, got {image_size!r}")
+        check_image_size(self.image_size)
         if quality not in QUALITIES:
             raise ValueError(f"unknown render quality {quality!r}; valid: {', '.join(QUALITIES)}")
         if render_mode not in (None, *self.metadata["render_modes"]):
@@ -208,7 +211,7 @@ class FactorWorldEnv(gym.Env):
                 if not 0 <= index < len(self.configs):
                     raise ValueError(f"env_index {index} out of range; this env has {len(self.configs)} configs")
             elif seed is not None:
-                index = seed % len(self.configs)
+                index = env_index_for_seed(seed, len(self.configs))
             else:
                 index = int(self.np_random.integers(len(self.configs)))
             config = self.configs[index]
@@ -229,7 +232,7 @@ class FactorWorldEnv(gym.Env):
 
     def _observe(self, mw_obs: np.ndarray) -> dict[str, Any]:
         assert self._scene is not None
-        obs: dict[str, Any] = {"agent_pos": np.concatenate([mw_obs[0:4], mw_obs[18:22]]).astype(np.float32)}
+        obs: dict[str, Any] = {"agent_pos": self._scene.proprioception(mw_obs)}
         if self.cameras:
             obs["pixels"] = self._scene.render_all()
             self._last_frame = obs["pixels"][self.cameras[0]]
@@ -246,11 +249,22 @@ class FactorWorldEnv(gym.Env):
         }
 
 
+def env_index_for_seed(seed: int, n_envs: int) -> int:
+    """The environment an episode reset with ``seed`` runs in: ``seed % n_envs``.
+
+    LeRobot's ``eval_policy`` resets episode ``i`` with ``start_seed + i`` whatever the batch size, so
+    consecutive episodes cycle through the environments: a multiple of ``n_envs`` episodes visits each
+    equally (``study.conditions.coverage`` checks it), and conditions evaluated from the same start
+    seed share their object starts episode by episode.
+    """
+    return seed % n_envs
+
+
 class _Scene:
     """One compiled scene: a Meta-World task env on our model, plus a renderer for our cameras."""
 
     def __init__(self, task, factors: FactorValues, cameras, quality, image_size) -> None:
-        from ..scene.build import build_model, resting_height_shift
+        from ..scene.build import build_model, resting_height_shift, robot_frame_offset
         from .metaworld_bridge import make_metaworld_env
 
         self.task = task
@@ -258,6 +272,7 @@ class _Scene:
         self.model = build_model(task, factors, cameras, quality, image_size)
         self.env = make_metaworld_env(task, self.model)
         self.rest_shift = resting_height_shift(task, factors)
+        self.robot_offset = robot_frame_offset(factors)
         self.image_size = image_size
         self._renderer = None
         self.metaworld_obs: np.ndarray | None = None
@@ -266,6 +281,13 @@ class _Scene:
         from .metaworld_bridge import reset_metaworld
 
         self.metaworld_obs = reset_metaworld(self.env, self.task, object_offset, arm_offset, self.rest_shift)
+
+    def proprioception(self, mw_obs: np.ndarray) -> np.ndarray:
+        """``agent_pos`` from Meta-World's state: gripper xyz and opening, now and one step before,
+        with positions moved from the world (table) frame into the robot's frame."""
+        state = np.concatenate([mw_obs[0:4], mw_obs[18:22]])
+        state[[0, 1, 2, 4, 5, 6]] += np.tile(self.robot_offset, 2)
+        return state.astype(np.float32)
 
     def render_all(self) -> dict[str, np.ndarray]:
         import mujoco

@@ -4,6 +4,13 @@ Meta-World v3 envs load their XML in ``MujocoEnv._initialize_simulation``; a sub
 returns our compiled model instead. Resets go through Meta-World's own ``reset_model`` (so its task
 state, goals and scripted experts stay valid) with the random reset vector frozen to the nominal
 start plus the Factor World object offset, and ``hand_init_pos`` set to the arm factor's start.
+
+A task row may redefine the goal and the success radius (the public Factor World's pick-place): the
+goal is moved after Meta-World's own reset (which keeps its sampled goal 15 cm from the object and
+would loop forever on a frozen vector closer than that), the goal space is narrowed to it so that
+Meta-World's observation clipping keeps it, and success is re-tested on Meta-World's own
+``obj_to_target`` distance. The shaped reward (version ``v2``) reads the goal every step, so it
+follows too.
 """
 
 from __future__ import annotations
@@ -14,6 +21,7 @@ from typing import Any
 
 import mujoco
 import numpy as np
+from gymnasium.spaces import Box
 
 from ..tasks import TaskSpec
 
@@ -29,7 +37,33 @@ def _env_class(metaworld_name: str) -> type:
     def _initialize_simulation(self) -> tuple[mujoco.MjModel, mujoco.MjData]:
         return self._factorworld_model, mujoco.MjData(self._factorworld_model)
 
-    return type(f"FactorWorld{base.__name__}", (base,), {"_initialize_simulation": _initialize_simulation})
+    def reset_model(self) -> np.ndarray:
+        obs = base.reset_model(self)
+        goal = self._factorworld_goal
+        if goal is None:
+            return obs
+        self._target_pos = goal.copy()
+        for site, pos in self._target_site_config:  # the goal marker, where the task draws one
+            self.model.site(site).pos = pos
+            self._set_pos_site(site, pos)
+        return self._get_obs()  # the state vector now carries the moved goal
+
+    def evaluate_state(self, obs: np.ndarray, action: np.ndarray) -> tuple[float, dict[str, Any]]:
+        reward, info = base.evaluate_state(self, obs, action)
+        radius = self._factorworld_success_radius
+        if radius is not None:
+            info["success"] = float(info["obj_to_target"] <= radius)
+        return reward, info
+
+    return type(
+        f"FactorWorld{base.__name__}",
+        (base,),
+        {
+            "_initialize_simulation": _initialize_simulation,
+            "reset_model": reset_model,
+            "evaluate_state": evaluate_state,
+        },
+    )
 
 
 def make_metaworld_env(task: TaskSpec, model: mujoco.MjModel) -> Any:
@@ -37,7 +71,11 @@ def make_metaworld_env(task: TaskSpec, model: mujoco.MjModel) -> Any:
     cls = _env_class(task.metaworld_name)
     env = cls.__new__(cls)
     env._factorworld_model = model
+    env._factorworld_goal = None if task.goal is None else np.array(task.goal, dtype=np.float64)
+    env._factorworld_success_radius = task.success_radius
     env.__init__()
+    if env._factorworld_goal is not None:
+        env.goal_space = Box(env._factorworld_goal, env._factorworld_goal.copy(), dtype=np.float64)
     env._partially_observable = False  # scripted experts read the goal from the state vector
     env.__dict__.pop("sawyer_observation_space", None)
     env._set_task_called = True

@@ -7,6 +7,8 @@ each other and a scene never inherits edits from a previous one.
 Table position is implemented by moving the robot, its cameras and the floor by the opposite offset:
 relative geometry is identical to moving the table and everything on it, while the task's own
 world-frame logic (object and goal positions, mocap bounds, success tests) stays valid untouched.
+The world frame is therefore the table's; the robot's own readings are expressed in the robot's
+frame (:func:`robot_frame_offset`), so that the robot sees the table move as in the public code.
 """
 
 from __future__ import annotations
@@ -102,7 +104,7 @@ def build_spec(
     spec = load_task_spec(task)
     _add_cameras(spec, cameras, factors.camera_pos)
     if factors.table_pos is not None:
-        _move_robot_side(spec, -np.asarray(factors.table_pos))
+        _move_robot_side(spec, -robot_frame_offset(factors))
     ambient, diffuse = factors.light if factors.light is not None else DEFAULT_HEADLIGHT
     spec.visual.headlight.ambient = [ambient] * 3
     spec.visual.headlight.diffuse = [diffuse] * 3
@@ -121,6 +123,16 @@ def build_spec(
         _add_scene_object(spec, f"fw_distractor{i}", item)
     _set_render_quality(spec, quality, image_size)
     return spec
+
+
+def robot_frame_offset(factors: FactorValues) -> np.ndarray:
+    """What to add to a world (= table frame) position to express it in the robot's frame.
+
+    The robot's frame is the world frame of the unshifted scene, carried along with the robot base.
+    Since the table factor moves the robot side by ``-table_pos``, a point fixed in the world sits at
+    ``+table_pos`` from where it would be for the robot: exactly as if the table had moved.
+    """
+    return np.zeros(3) if factors.table_pos is None else np.asarray(factors.table_pos, dtype=np.float64)
 
 
 def resting_height_shift(task: TaskSpec, factors: FactorValues) -> float:
