@@ -2,8 +2,10 @@
 
 It holds both split modes: ``family`` (whole families held out, the default) and ``variant`` (name by
 name). Deterministic: running it twice writes identical bytes. Run it after adding families, changing
-VARIANTS_PER_FAMILY, the curated Meta-World lists or their families, TRAIN_FRACTION or a task's
-object_family; tests fail until the file matches.
+VARIANTS_PER_FAMILY, the curated Meta-World lists or their families, TRAIN_FRACTION, a task's
+object_family or the tasks themselves (the textures their Meta-World scenes show are kept in train);
+tests fail until the file matches. It refuses to write a split smaller than the paper's pools
+(PAPER_SPLIT_SIZES).
 
     python scripts/make_asset_splits.py [--check]
 """
@@ -20,6 +22,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from lerobot_factorworld.assets.library import (  # noqa: E402
     ASSET_SPLITS,
     KINDS,
+    PAPER_SPLIT_SIZES,
     SPLITS,
     SPLITS_FILE,
     builtin_splits_document,
@@ -37,12 +40,27 @@ def main() -> int:
     args = parser.parse_args()
     text = render()
     doc = json.loads(text)
+    too_small = []
     for mode in ASSET_SPLITS:
         for kind in KINDS:
             counts = doc["counts"][mode][kind]
             families = doc["splits"][mode][kind]["families"]
             sides = "  ".join(f"{s}={counts[s]} ({len(families[s])} families)" for s in SPLITS)
             print(f"{mode:7s} {kind:8s} {sides}  total={sum(counts.values())}")
+            too_small += [
+                f"{mode} {kind} {s}: {counts[s]} < {PAPER_SPLIT_SIZES[kind][s]}"
+                for s in SPLITS
+                if counts[s] < PAPER_SPLIT_SIZES[kind][s]
+            ]
+    print(
+        "kept in train (seen in the default scenes): "
+        + "; ".join(f"{k}s {', '.join(v)}" for k, v in doc["seen_families"].items())
+    )
+    if too_small:
+        print(
+            f"splits smaller than the paper's pools: {'; '.join(too_small)}; add families or variants", file=sys.stderr
+        )
+        return 1
     current = SPLITS_FILE.read_text(encoding="utf-8") if SPLITS_FILE.exists() else None
     if args.check:
         if current != text:

@@ -28,6 +28,7 @@ REPO = Path(__file__).resolve().parents[1]
 @pytest.mark.parametrize("mode", ["family", "variant"])
 @pytest.mark.parametrize(("kind", "min_train", "min_eval"), [("texture", 81, 81), ("shape", 100, 70)])
 def test_builtin_splits_disjoint_complete_and_large(kind: str, min_train: int, min_eval: int, mode: str) -> None:
+    assert library.PAPER_SPLIT_SIZES[kind] == {"train": min_train, "eval": min_eval}  # what the script enforces
     train, evals = A.split_names(kind, "train", mode=mode), A.split_names(kind, "eval", mode=mode)
     assert len(train) >= min_train and len(evals) >= min_eval  # the paper: 81/81 textures, 100/70 objects
     assert not set(train) & set(evals)
@@ -44,8 +45,8 @@ def test_family_split_holds_whole_families_out(kind: str) -> None:
     assert not train_fams & eval_fams  # no family on both sides, Meta-World files included
     assert train_fams | eval_fams == set(A.builtin_families(kind))
     assert len(eval_fams) >= 5  # held out: several whole kinds, not a handful of variants
-    assert sorted(train_fams) == list(A.split_families(kind, "train"))
-    assert sorted(eval_fams) == list(A.split_families(kind, "eval"))
+    stored = json.loads(library.SPLITS_FILE.read_text(encoding="utf-8"))["splits"]["family"][kind]["families"]
+    assert (sorted(train_fams), sorted(eval_fams)) == (stored["train"], stored["eval"])
     assert set(A.seen_families(kind)) <= train_fams  # what the default scenes show is never held out
     # the per-variant split is what the family split fixes: most families sit on both of its sides
     shared = {A.asset_family(n) for n in A.split_names(kind, "train", mode="variant")} & {
@@ -61,7 +62,7 @@ def test_families_of_builtin_assets() -> None:
     assert A.asset_family("metaworld:textures/wood2.png") == "wood"  # Meta-World's woods are one family
     assert A.asset_family("metaworld:objects/meshes/puck/puck.stl") == "cylinder"
     assert A.asset_family("file:/somewhere/x.png") == "file:/somewhere/x.png"  # outside any folder: its own
-    assert A.seen_families("texture") == ("grid", "wood") and A.seen_families("shape") == (
+    assert A.seen_families("texture") == ("bricks", "grid", "plain", "wood") and A.seen_families("shape") == (
         "box",
         "cylinder",
         "ellipsoid",
@@ -93,6 +94,24 @@ def test_splits_file_matches_code_and_script_is_deterministic() -> None:
     assert "family  texture  train=" in out.stdout and "variant shape" in out.stdout
 
 
+def test_script_refuses_splits_smaller_than_the_papers(
+    monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("make_asset_splits", REPO / "scripts" / "make_asset_splits.py")
+    script = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(script)
+    monkeypatch.setattr(
+        script, "PAPER_SPLIT_SIZES", {"texture": {"train": 81, "eval": 200}, "shape": {"train": 1, "eval": 1}}
+    )
+    monkeypatch.setattr(sys, "argv", ["make_asset_splits.py", "--check"])
+    assert script.main() == 1
+    err = capsys.readouterr().err
+    assert "smaller than the paper's pools: family texture eval: " in err and "variant texture eval: " in err
+    assert "texture train" not in err and "shape" not in err
+
+
 @pytest.mark.parametrize("mode", ["family", "variant"])
 def test_hand_edited_splits_file_is_rejected(tmp_path: Path, monkeypatch: pytest.MonkeyPatch, mode: str) -> None:
     doc = json.loads(library.SPLITS_FILE.read_text(encoding="utf-8"))
@@ -107,6 +126,142 @@ def test_hand_edited_splits_file_is_rejected(tmp_path: Path, monkeypatch: pytest
             A.split_names("texture", "train")
     finally:
         library._builtin_splits.cache_clear()
+
+
+def _move_to_train(lists: dict) -> None:
+    """Move one eval name of a multi-variant family to train, listing its family on both sides."""
+    name = next(n for n in lists["names"]["eval"] if n.startswith("proc:"))
+    lists["names"]["eval"].remove(name)
+    lists["names"]["train"] = sorted([*lists["names"]["train"], name])
+    lists["families"]["train"] = sorted({*lists["families"]["train"], A.asset_family(name)})
+
+
+@pytest.mark.parametrize(
+    ("mode", "edit", "message"),
+    [
+        ("variant", lambda d: d["names"]["train"].append(d["names"]["eval"][0]), "train and eval overlap"),
+        ("family", lambda d: d["names"]["eval"].pop(), "its names are not the built-in pool"),
+        ("variant", lambda d: d["families"]["eval"].pop(), "its eval families are not the families of its eval"),
+        ("family", _move_to_train, "a family is on both sides of the family split"),
+    ],
+    ids=["overlap", "not-the-pool", "families-of-names", "family-on-both-sides"],
+)
+def test_splits_file_checks_hold_even_with_a_matching_sha256(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, mode: str, edit, message: str
+) -> None:
+    """Lists edited and re-hashed (as a script bug could write them) still fail the file's own checks."""
+    doc = json.loads(library.SPLITS_FILE.read_text(encoding="utf-8"))
+    edit(doc["splits"][mode]["shape"])
+    doc["sha256"] = library.splits_digest(doc["splits"])
+    edited = tmp_path / "asset_splits.json"
+    edited.write_text(json.dumps(doc), encoding="utf-8")
+    monkeypatch.setattr(library, "SPLITS_FILE", edited)
+    library._builtin_splits.cache_clear()
+    try:
+        with pytest.raises(A.AssetSplitsError, match=f"{mode} split of shapes: {message}.*make_asset_splits"):
+            A.split_names("texture", "train")
+    finally:
+        library._builtin_splits.cache_clear()
+
+
+def _shown_in_compiled_scene(task: str) -> tuple[set[str], set[str], set[str]]:
+    """(textures, pool meshes, object textures) on visible geoms, read from the compiled model: an
+    independent check of :func:`scene_assets`, which reads the uncompiled spec."""
+    from lerobot_factorworld.scene.build import load_task_spec, metaworld_xml
+    from lerobot_factorworld.tasks import get_task
+
+    spec = get_task(task)
+    model = load_task_spec(spec).compile()
+    base = Path(metaworld_xml(spec)).parent
+
+    def name(adr: int) -> str:
+        rel = os.path.normpath(base / model.paths[adr:].split(b"\0", 1)[0].decode())
+        return f"metaworld:{Path(rel).relative_to(A.metaworld_assets_dir()).as_posix()}"
+
+    roots = {model.body(b).id for b in spec.object_bodies}
+    textures, meshes, object_textures = set(), set(), set()
+    for g in range(model.ngeom):
+        mat = int(model.geom_matid[g])
+        if model.geom_group[g] > 2 or model.geom_rgba[g][3] == 0 or (mat >= 0 and model.mat_rgba[mat][3] == 0):
+            continue
+        body = int(model.geom_bodyid[g])
+        while body and body not in roots:
+            body = int(model.body_parentid[body])
+        if model.geom_type[g] == mujoco.mjtGeom.mjGEOM_MESH:
+            meshes.add(name(model.mesh_pathadr[model.geom_dataid[g]]))
+        for tex in model.mat_texid[mat] if mat >= 0 else ():
+            if tex >= 0 and model.tex_pathadr[tex] >= 0:
+                textures.add(name(model.tex_pathadr[tex]))
+                if body in roots:
+                    object_textures.add(name(model.tex_pathadr[tex]))
+    return textures, {m for m in meshes if m.removeprefix("metaworld:") in A.METAWORLD_MESH_FAMILIES}, object_textures
+
+
+@pytest.mark.parametrize(
+    ("task", "meshes", "object_textures"),
+    [
+        ("faucet-open", {"faucet/faucetbase.stl", "faucet/faucethead.stl"}, {"metal2.png"}),
+        ("basketball", {"basketball/basketballouter.stl", "basketball/hoop.stl"}, set()),
+        ("bin-picking", {"bin/bin.stl"}, set()),
+        ("button-press-wall", {"buttonbox/stopbutton.stl"}, {"metal1.png"}),
+        ("door-open", {"doorlock/door_handle.stl"}, {"metal1.png", "metal2.png"}),
+        ("window-open", set(), set()),
+    ],
+)
+def test_scene_assets_are_what_the_compiled_scene_shows(task: str, meshes: set[str], object_textures: set[str]) -> None:
+    from lerobot_factorworld.assets.scenes import scene_assets
+
+    shown = scene_assets(task)
+    assert (set(shown.textures), set(shown.meshes), set(shown.object_textures)) == _shown_in_compiled_scene(task)
+    assert set(shown.meshes) == {f"metaworld:objects/meshes/{m}" for m in meshes}
+    assert set(shown.object_textures) == {f"metaworld:textures/{t}" for t in object_textures}
+    assert set(shown.object_meshes) <= set(shown.meshes) and set(shown.object_textures) <= set(shown.textures)
+    assert {A.DEFAULT_TABLE_TEXTURE, A.DEFAULT_FLOOR_TEXTURE} <= set(shown.textures)
+
+
+def test_textures_any_default_scene_shows_are_never_held_out() -> None:
+    """The walls' bricks and the fixtures' metal are seen in training, like the table's wood."""
+    from lerobot_factorworld.assets.scenes import scene_assets
+    from lerobot_factorworld.tasks import TASKS
+
+    shown = {name for task in TASKS for name in scene_assets(task).textures}
+    walls_and_fixtures = {f"metaworld:textures/{t}" for t in ("brick1.png", "metal1.png", "metal2.png", "wood4.png")}
+    assert walls_and_fixtures <= shown
+    assert set(A.seen_families("texture")) == {A.asset_family(n) for n in shown}
+    for seed in (0, 1, 2):
+        held_out = {A.asset_family(n) for n in A.split_names("texture", "eval", seed=seed)}
+        assert not held_out & set(A.seen_families("texture")), seed
+    assert shown <= set(A.split_names("texture", "train"))
+
+
+def _flat(text: str) -> str:
+    return " ".join(text.split())
+
+
+def test_docs_state_the_stored_split_counts_and_families() -> None:
+    doc = json.loads(library.SPLITS_FILE.read_text(encoding="utf-8"))
+    counts, splits = doc["counts"], doc["splits"]
+
+    def side(kind: str, split: str) -> str:
+        return f"{counts['family'][kind][split]} ({len(splits['family'][kind]['families'][split])} families)"
+
+    factors_md = _flat((REPO / "docs" / "factors.md").read_text(encoding="utf-8"))
+    row = f"| `family` (default) | {side('texture', 'train')} / {side('texture', 'eval')} | "
+    assert row + f"{side('shape', 'train')} / {side('shape', 'eval')} |" in factors_md
+    v = counts["variant"]
+    assert f"| `variant` | {v['texture']['train']} / {v['texture']['eval']} (" in factors_md
+    assert f"| {v['shape']['train']} / {v['shape']['eval']} (" in factors_md
+    held = "; ".join(
+        f"{kind}s " + ", ".join(f"`{f}`" for f in splits["family"][kind]["families"]["eval"]) for kind in A.KINDS
+    )
+    assert f"Held out by the family split: {held}." in factors_md
+    f = counts["family"]
+    readme = _flat((REPO / "README.md").read_text(encoding="utf-8"))
+    assert (
+        f"textures {f['texture']['train']} train / {f['texture']['eval']} eval, shapes {f['shape']['train']} / "
+        f"{f['shape']['eval']};" in readme
+    )
+    assert f"({v['texture']['train']} / {v['texture']['eval']}, {v['shape']['train']} / {v['shape']['eval']})" in readme
 
 
 def test_other_seed_resplits_builtin_pool() -> None:
@@ -127,8 +282,8 @@ def test_family_split_is_seeded(kind: str, min_train: int, min_eval: int) -> Non
         assert (train, evals) == (A.split_names(kind, "train", seed=seed), A.split_names(kind, "eval", seed=seed))
         assert len(train) >= min_train and len(evals) >= min_eval
         assert not {A.asset_family(n) for n in train} & {A.asset_family(n) for n in evals}
-        assert set(A.seen_families(kind)) <= set(A.split_families(kind, "train", seed=seed))
-        by_seed[seed] = A.split_families(kind, "eval", seed=seed)
+        assert set(A.seen_families(kind)) <= {A.asset_family(n) for n in train}
+        by_seed[seed] = tuple(sorted({A.asset_family(n) for n in evals}))
     assert len(set(by_seed.values())) == 3  # another seed holds other families out
     assert by_seed[0] == tuple(
         json.loads(library.SPLITS_FILE.read_text())["splits"]["family"][kind]["families"]["eval"]
@@ -321,7 +476,7 @@ def test_user_folder_family_split_keeps_subfolders_whole(tmp_path: Path) -> None
     train, evals = A.split_names("texture", "train", tmp_path), A.split_names("texture", "eval", tmp_path)
     assert sorted(train + evals) == sorted(families) and train and evals
     assert not {families[n] for n in train} & {families[n] for n in evals}
-    assert set(A.split_families("texture", "eval", tmp_path)) == {families[n] for n in evals}
+    assert {A.asset_family(n, tmp_path) for n in evals} == {families[n] for n in evals}
     # a flat folder: every file is its own family, so both split modes agree
     flat = tmp_path / "flat"
     flat.mkdir()

@@ -2,6 +2,7 @@
 
 import ast
 import json
+from collections import Counter
 from pathlib import Path
 
 import draccus
@@ -12,6 +13,7 @@ from PIL import Image
 import lerobot_factorworld
 from lerobot_factorworld import FACTORS, TASKS, FactorValues, SceneConfig, SceneObject, load_configs, save_configs
 from lerobot_factorworld.assets import DEFAULT_TABLE_TEXTURE, asset_family, split_names
+from lerobot_factorworld.assets.scenes import scene_assets, scene_shape_families
 from lerobot_factorworld.factors import registry, sampling, values
 from lerobot_factorworld.factors.registry import (
     PAPER_STUDY_FACTORS,
@@ -40,7 +42,7 @@ PAPER_FACTORS = (
 
 def test_eleven_factors_named_as_in_the_paper():
     assert tuple(FACTORS) == PAPER_FACTORS
-    assert len(TASKS) == 20
+    assert len([t for t in TASKS.values() if not t.family]) == 20  # the public Factor World's; + the pick family
 
 
 def test_continuous_ranges_follow_the_paper_table():
@@ -228,6 +230,91 @@ def test_distractors_never_share_the_task_objects_family(task):
         shapes = [d.shape for c in train + tests for d in c.factors.distractors]
         assert len(shapes) == 120 and family not in _families(shapes)
         assert len(_families(shapes)) >= 8
+
+
+_SCENE_LOOKALIKES = {
+    "faucet-open": {"cylinder", "hardware"},  # the faucet's head and base
+    "button-press": {"cylinder"},  # the button
+    "drawer-open": {"open_box"},  # the drawer
+    "lever-pull": {"ellipsoid", "cylinder"},  # the ball handle and the rod base
+    "door-open": {"hardware"},  # the door handle
+    "basketball": {"ellipsoid", "torus"},  # the ball and the hoop
+    "bin-picking": {"box", "open_box"},  # the block and the bin
+}
+"""What the review found next to each task's own fixture (a second faucet head, hoop, bin, ...)."""
+
+
+@pytest.mark.parametrize("task", list(TASKS))
+def test_distractors_never_look_like_anything_the_tasks_scene_shows(task, monkeypatch):
+    from lerobot_factorworld.scene import layout
+
+    monkeypatch.setattr(layout, "keepout_boxes", lambda name: [])  # placement is not under test here: quick
+    shown = set(scene_shape_families(task))
+    assert _SCENE_LOOKALIKES.get(task, set()) <= shown
+    options = SamplingOptions(n_distractors=5)
+    train = sample_configs(task, 12, seed=0, factors=("distractors",), options=options)
+    tests = shift_configs(train, "distractors", 12, seed=1, options=options)
+    families = _families(d.shape for c in train + tests for d in c.factors.distractors)
+    assert not families & shown
+    assert len(families) >= 8  # the rule drops a few families, not the variety
+
+
+def test_sampled_table_texture_avoids_the_fixture_objects_own_textures(monkeypatch):
+    door = scene_assets("door-open").object_textures  # what the door shows while its texture is not varied
+    assert door == ("metaworld:textures/metal1.png", "metaworld:textures/metal2.png")
+    pool = (*door, "metaworld:textures/wood1.png", "proc:marble-000")
+    monkeypatch.setattr(sampling, "asset_split_names", lambda kind, split, folder=None, mode="family": pool)
+    tables = [c.factors.table_texture for c in sample_configs("door-open", 40, seed=0, factors=("table_texture",))]
+    assert set(tables) == set(pool) - set(door)  # drawn alone, half of them would be the door's metal
+    both = sample_configs("door-open", 40, seed=0, factors=("object_texture", "table_texture"))
+    assert all(c.factors.table_texture != c.factors.object_texture for c in both)
+    # a repainted door frees its metal for the table, which then avoids the door's new texture
+    repainted = [SceneConfig("door-open", FactorValues(object_texture="proc:marble-000"))]
+    shifted = [c.factors.table_texture for c in shift_configs(repainted, "table_texture", 40, seed=0, split="train")]
+    assert set(shifted) == set(pool) - {"proc:marble-000"}
+    # a configuration written by hand is taken as given (the rules are sampling rules, docs/factors.md)
+    same = SceneConfig("door-open", FactorValues(object_texture=door[0], table_texture=door[0]))
+    assert same.factors.object_texture == same.factors.table_texture
+
+
+def test_a_replaced_draw_is_uniform_over_the_allowed_names_and_takes_one_number():
+    pool = sampling._Pool("shape", tuple(f"n{i}" for i in range(10)), {})
+    excluded = {"n3", "n4", "n5"}  # a family's names are neighbours in the sorted pool
+
+    def allowed(name: str) -> bool:
+        return name not in excluded
+
+    rng = np.random.default_rng(0)
+    counts = Counter(sampling._draw(rng, pool, allowed, "shape") for _ in range(21000))
+    assert set(counts) == set(pool.names) - excluded
+    assert all(abs(c / 21000 - 1 / 7) < 0.012 for c in counts.values()), counts  # 5 sigma; `k mod m` gave 2/10
+    a, b = np.random.default_rng(1), np.random.default_rng(1)
+    draws = [sampling._draw(a, pool, allowed, "shape") for _ in range(50)]
+    unruled = [pool.names[int(b.integers(10))] for _ in range(50)]
+    assert a.random() == b.random()  # one draw each, whatever the rule did: later draws never shift
+    assert [d for d, u in zip(draws, unruled) if u not in excluded] == [u for u in unruled if u not in excluded]
+    again = np.random.default_rng(1)
+    assert draws == [sampling._draw(again, pool, allowed, "shape") for _ in range(50)]  # same seed, same names
+
+
+def test_sample_command_takes_sampling_options(tmp_path, capsys):
+    from lerobot_factorworld import cli
+
+    out = tmp_path / "envs.json"
+    args = ["sample", "--task=door-open", "--n=20", "--factors=[table_texture]", f"--out={out}"]
+    cli.main([*args, "--sampling.asset_split=variant"])
+    variant = SamplingOptions(asset_split="variant")
+    assert load_configs(out) == sample_configs("door-open", 20, 0, "train", ("table_texture",), variant)
+    tables = {c.factors.table_texture for c in load_configs(out)}
+    assert tables <= set(split_names("texture", "train", mode="variant"))
+    assert _families(tables) & _families(split_names("texture", "eval"))  # kinds the family split holds out
+    capsys.readouterr()
+    with pytest.raises(SystemExit) as exit_:
+        cli.main([*args, "--sampling.asset_split=scene"])
+    assert exit_.value.code == 2
+    assert capsys.readouterr().err.splitlines() == [
+        "error: unknown asset split 'scene'; valid asset splits: family, variant"
+    ]
 
 
 def test_distractors_avoid_the_family_of_the_objects_own_shape():

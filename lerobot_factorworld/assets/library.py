@@ -49,6 +49,12 @@ TEXTURE_EXTENSIONS: tuple[str, ...] = (".png", ".jpg", ".jpeg")
 TRAIN_FRACTION: dict[str, float] = {"texture": 0.5, "shape": 0.6}
 """Share of a pool that goes to ``train``; shapes get more training variety (Factor World used 100:70)."""
 
+PAPER_SPLIT_SIZES: dict[str, dict[str, int]] = {
+    "texture": {"train": 81, "eval": 81},
+    "shape": {"train": 100, "eval": 70},
+}
+"""The paper's pools (81 / 81 images, 100 / 70 scanned objects): every built-in split is at least as large."""
+
 VARIANTS_PER_FAMILY = 12
 SPLITS_SEED = 0
 SPLITS_FILE = Path(__file__).with_name("asset_splits.json")
@@ -323,15 +329,20 @@ def builtin_names(kind: AssetKind) -> tuple[str, ...]:
 def seen_families(kind: AssetKind) -> tuple[str, ...]:
     """Built-in families the default scenes show, which the family split always puts in ``train``.
 
-    A factor a study does not vary keeps its default, so these are seen in training whatever the split:
-    the table's and floor's Meta-World textures, and the families of the tasks' loose objects
-    (:attr:`~lerobot_factorworld.tasks.TaskSpec.object_family`: the puck is a cylinder, ...). Holding them
-    out would put a training look in the evaluation split.
+    A factor a study does not vary keeps its default, so these are seen in training whatever the split.
+    Textures: the families of every texture any task's default scene shows, read from the scenes
+    (:func:`~lerobot_factorworld.assets.scenes.scene_assets`: the table's wood, the floor's tiles, the
+    robot's and fixtures' metal, the walls' bricks). Shapes: the families of the tasks' loose objects
+    (:attr:`~lerobot_factorworld.tasks.TaskSpec.object_family`: the puck is a cylinder, ...), which the
+    object-shape factor replaces; a fixture's meshes need no place here, because no distractor of its task
+    is drawn from their families (:func:`~lerobot_factorworld.assets.scenes.scene_shape_families`).
+    Holding any of them out would put a training look in the evaluation split.
     """
     from ..tasks import TASKS
+    from .scenes import scene_texture_families
 
     if _check_kind(kind) == "texture":
-        seen = {asset_family(DEFAULT_TABLE_TEXTURE), asset_family(DEFAULT_FLOOR_TEXTURE)}
+        seen = {family for task in TASKS for family in scene_texture_families(task)}
     else:
         seen = {task.object_family for task in TASKS.values() if task.object_family}
     return tuple(sorted(seen))
@@ -495,12 +506,25 @@ def _builtin_splits() -> dict[str, dict[str, dict[str, dict[str, tuple[str, ...]
         )
     for mode, by_kind in lists.items():
         for kind, d in by_kind.items():
-            if set(d["names"]["train"]) & set(d["names"]["eval"]):
-                raise AssetSplitsError(f"{SPLITS_FILE}: {mode} split of {kind}s: train and eval overlap; {regen}")
-            misplaced = any(asset_family(n) not in d["families"][s] for s in SPLITS for n in d["names"][s])
-            if mode == "family" and (misplaced or set(d["families"]["train"]) & set(d["families"]["eval"])):
-                raise AssetSplitsError(f"{SPLITS_FILE}: a {kind} family is on both sides of the family split; {regen}")
+            problem = _split_problem(mode, kind, d)  # type: ignore[arg-type]
+            if problem:
+                raise AssetSplitsError(f"{SPLITS_FILE}: {mode} split of {kind}s: {problem}; {regen}")
     return lists
+
+
+def _split_problem(mode: AssetSplitMode, kind: AssetKind, lists: dict[str, dict[str, tuple[str, ...]]]) -> str:
+    """What is wrong with one stored split (empty when nothing): the checks that hold whatever the sha256."""
+    names, families = lists["names"], lists["families"]
+    if set(names["train"]) & set(names["eval"]):
+        return "train and eval overlap"
+    if sorted(names["train"] + names["eval"]) != list(builtin_names(kind)):
+        return "its names are not the built-in pool (assets were added or removed since it was written)"
+    for split in SPLITS:
+        if families[split] != tuple(sorted({asset_family(n) for n in names[split]})):
+            return f"its {split} families are not the families of its {split} names"
+    if mode == "family" and set(families["train"]) & set(families["eval"]):
+        return "a family is on both sides of the family split"
+    return ""
 
 
 def _folder_files(kind: AssetKind, folder: str | Path) -> list[tuple[str, str]]:
@@ -570,20 +594,8 @@ def split_names(
     ``folder`` the built-in split is read from ``asset_splits.json`` (for ``seed == 0``; another seed
     re-splits the built-in pool with the same function). With ``folder`` the same split function runs on
     the folder's files, keyed by their relative paths (a top-level subfolder is a family), so a copied
-    folder splits identically anywhere.
+    folder splits identically anywhere. The families a side draws from are those of its names
+    (:func:`asset_family` with the same ``folder``); ``asset_splits.json`` lists them for the built-in pool.
     """
     kind, split, mode = _check_kind(kind), _check_split(split), check_asset_split(mode)
     return _split_lists(kind, folder, seed, mode)["names"][split]
-
-
-def split_families(
-    kind: AssetKind,
-    split: Split,
-    folder: str | Path | None = None,
-    seed: int = 0,
-    mode: AssetSplitMode = DEFAULT_ASSET_SPLIT,
-) -> tuple[str, ...]:
-    """The families that :func:`split_names` draws from for the same arguments (sorted). In the family
-    split the two sides share none; in the per-variant split most families are on both sides."""
-    kind, split, mode = _check_kind(kind), _check_split(split), check_asset_split(mode)
-    return _split_lists(kind, folder, seed, mode)["families"][split]
