@@ -318,3 +318,64 @@ def test_the_same_seed_gives_identical_datasets(tmp_path):
         for key in ("action", "observation.state", "observation.images.front"):
             assert torch.equal(a[key], b[key]), (i, key)
     assert episode_records("local/same", roots[0]) == episode_records("local/same", roots[1])
+
+
+def test_data_of_another_version_is_never_appended_to_or_resumed(dataset, tmp_path, capsys):
+    import shutil
+
+    from lerobot_factorworld.datasets.version import DATA_VERSION, DATA_VERSION_KEY
+
+    source, _ = dataset
+    settings = json.loads((source / "meta" / "factorworld.json").read_text())["settings"]
+    assert settings[DATA_VERSION_KEY] == DATA_VERSION == 2
+    old = tmp_path / "old"
+    shutil.copytree(source, old)
+    sidecar = json.loads((old / "meta" / "factorworld.json").read_text())
+    del sidecar["settings"][DATA_VERSION_KEY]  # as version 1 (world-frame state, old pick-place goal) wrote it
+    (old / "meta" / "factorworld.json").write_text(json.dumps(sidecar))
+    same = [
+        "collect",
+        "--task=pick-place",
+        f"--factors=[{','.join(FACTORS)}]",
+        "--n_envs=2",
+        "--demos_per_env=2",
+        "--seed=3",
+        "--workers=1",
+        "--episodes_per_shard=1",
+        "--use_videos=false",
+        "--repo_id=local/tiny",
+    ]
+    before = {p: p.stat().st_mtime_ns for p in old.rglob("*") if p.is_file()}
+    for mode in ("append", "new"):
+        code, err = cli_refusal([*same, f"--root={old}", f"--mode={mode}"], capsys)
+        assert code == 1 and f"{old} holds data version 1 (observation.state in the table's frame" in err, err
+        assert "writes data version 2 (observation.state in the robot's frame" in err and "--mode=overwrite" in err
+    assert before == {p: p.stat().st_mtime_ns for p in old.rglob("*") if p.is_file()}
+    assert not staging_dir(old).exists()
+
+    fresh = tmp_path / "fresh"  # an unfinished collection that version 1 staged: never resumed by this code
+    parts = staging_dir(fresh)
+    parts.mkdir()
+    (parts / "plan.json").write_text(json.dumps({"settings": sidecar["settings"], "mode": "new"}))
+    code, err = cli_refusal([*same, f"--root={fresh}"], capsys)
+    assert code == 1 and f"the unfinished collection staged in {parts} is data version 1" in err, err
+    assert [p.name for p in parts.iterdir()] == ["plan.json"] and not fresh.exists()
+
+
+def test_push_settings_are_checked_before_collecting(tmp_path, capsys, monkeypatch):
+    import huggingface_hub
+
+    root = tmp_path / "pushed"
+    tiny_args = ["collect", f"--root={root}", "--n_envs=1", "--demos=1", "--factors=[light]", "--workers=1"]
+    monkeypatch.setattr(huggingface_hub, "get_token", lambda: None)  # not logged in
+    refusals = [
+        (["--repo_id=someone/x", "--private=true"], "private=true only applies to a push: add --push_to_hub=true"),
+        (["--repo_id=local/x", "--push_to_hub=true"], "needs a Hub repo_id ('user/name' with your user or"),
+        (["--repo_id=someone/x", "--push_to_hub=true"], "needs a Hugging Face token with write access"),
+    ]
+    for extra, expected in refusals:
+        code, err = cli_refusal([*tiny_args, *extra], capsys)
+        assert code == 2 and expected in err, (extra, err)
+    assert not root.exists() and not staging_dir(root).exists()
+    monkeypatch.setattr(huggingface_hub, "get_token", lambda: "hf_token")
+    assert tiny(root, repo_id="someone/x", push_to_hub=True, private=True).private  # all prerequisites met

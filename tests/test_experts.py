@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 
 from lerobot_factorworld import TASKS, FactorValues, SceneConfig
+from lerobot_factorworld.datasets.collect import noise_rng
 from lerobot_factorworld.experts import expert_action, expert_policy
 from lerobot_factorworld.factors.registry import FACTORS, supported_factors
 from lerobot_factorworld.factors.sampling import sample_configs
@@ -19,12 +20,13 @@ PHYSICAL = [name for name, spec in FACTORS.items() if not spec.visual]
 VISUAL = [name for name, spec in FACTORS.items() if spec.visual]
 
 
-def run_expert(env, policy, seed, record=False):
+def run_expert(env, policy, seed, record=False, act=expert_action):
+    """One episode as ``factorworld collect`` runs it: the reset seed, and that seed's own noise stream."""
     env.reset(seed=seed)
-    rng = np.random.default_rng(seed)
+    rng = noise_rng(seed)
     states = []
     for _ in range(env._max_episode_steps):
-        _, _, terminated, truncated, info = env.step(expert_action(policy, env.state_observation, rng, NOISE))
+        _, _, terminated, truncated, info = env.step(act(policy, env.state_observation, rng, NOISE))
         if record:
             states.append(env.data.qpos.copy())
         if terminated or truncated:
@@ -79,3 +81,22 @@ def test_pick_place_expert_leaves_the_puck_on_the_table_goal(make_env):
         state = env.state_observation
         puck, goal = state[4:7], state[36:39]
         assert np.linalg.norm(puck - goal) < 0.02 and puck[2] < 0.03, f"seed {seed}: puck at {puck}, goal {goal}"
+
+
+def test_experts_are_measured_as_the_collector_runs_them(make_env):
+    """The rates above are those of ``factorworld collect``: the same actions for the same episode seed."""
+    from lerobot_factorworld.datasets.collect import _rollout, episode_seed
+
+    env = make_env("pick-place", cameras=("front",), image_size=8, max_episode_steps=15)
+    policy = expert_policy("pick-place")
+    seed = episode_seed(0, 0, 0, 0, 0)
+    frames, _ = _rollout(env, policy, seed, NOISE, expert_action)
+    actions = []
+
+    def recording(*args):
+        actions.append(expert_action(*args))
+        return actions[-1]
+
+    run_expert(env, policy, seed, act=recording)
+    assert len(actions) == len(frames) == 15
+    assert all(np.array_equal(a, f["action"]) for a, f in zip(actions, frames, strict=True))

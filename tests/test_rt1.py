@@ -1,6 +1,7 @@
 """RT-1: tokenizer, mask, shapes, FiLM identity, save/load, token reuse, offline weights, and real
 ``lerobot-train`` / ``lerobot-eval`` runs on an exported Factor World dataset."""
 
+import json
 import os
 import re
 import subprocess
@@ -13,7 +14,7 @@ import torch
 from lerobot.configs import FeatureType, NormalizationMode, PolicyFeature
 
 import lerobot_factorworld.lerobot_plugin  # noqa: F401  (registers rt1 and its processor step)
-from lerobot_factorworld.policies.rt1.configuration_rt1 import LANGUAGE_EMBEDDING_KEY, PRESETS, RT1Config
+from lerobot_factorworld.policies.rt1.configuration_rt1 import LANGUAGE_EMBEDDING_KEY, MINILM_DIM, PRESETS, RT1Config
 from lerobot_factorworld.policies.rt1.film_efficientnet import FiLM, FiLMEfficientNet
 from lerobot_factorworld.policies.rt1.modeling_rt1 import RT1Policy, photometric, random_shift
 from lerobot_factorworld.policies.rt1.tokenizers import ActionTokenizer
@@ -336,6 +337,29 @@ def test_a_checkpoint_trained_with_a_b3_weights_file_reloads_without_it(tmp_path
     assert torch.equal(policy.select_action(frame(2, seed=3)), loaded.select_action(frame(2, seed=3)))
 
 
+def test_a_checkpoint_of_older_code_with_false_next_to_the_weights_path_still_reloads(tmp_path):
+    from lerobot.configs.policies import PreTrainedConfig
+
+    weights = tmp_path / "b3.pth"
+    b3_state_file(weights)
+    policy = make_policy(backbone="efficientnet_b3", backbone_weights_path=str(weights), image_size=64)
+    ckpt = tmp_path / "ckpt"
+    policy.save_pretrained(ckpt)
+    weights.unlink()
+    saved = json.loads((ckpt / "config.json").read_text())
+    assert saved["pretrained_backbone"] is True and saved["backbone_weights_path"] == str(weights)
+    saved["pretrained_backbone"] = False  # what older code wrote: the rt1 preset's False next to a path it loaded
+    (ckpt / "config.json").write_text(json.dumps(saved))
+    config = PreTrainedConfig.from_pretrained(ckpt)  # how lerobot-eval / lerobot-train --policy.path read it
+    assert isinstance(config, RT1Config) and config.input_features
+    with pytest.raises(ValueError, match="pretrained_backbone=false contradicts backbone_weights_path"):
+        RT1Policy(config)  # building fresh from it would have to pick one of the two
+    for loaded in (RT1Policy.from_pretrained(ckpt, config=config), RT1Policy.from_pretrained(ckpt)):
+        assert loaded.config.pretrained_backbone  # recorded as what it was: started from the file
+        for (name, a), b in zip(policy.state_dict().items(), loaded.state_dict().values(), strict=True):
+            assert torch.equal(a, b), name
+
+
 def test_backbone_weight_settings_are_checked_in_the_config():
     with pytest.raises(ValueError, match="efficientnet_b3 ImageNet weights are not shipped"):
         make_policy(backbone="efficientnet_b3", pretrained_backbone=True)
@@ -343,8 +367,13 @@ def test_backbone_weight_settings_are_checked_in_the_config():
         make_policy(backbone_weights_path="/tmp/b3.pth")
     with pytest.raises(ValueError, match="no pretrained weights for backbone 'tiny'"):
         make_policy(pretrained_backbone=True)
-    saved = RT1Config(backbone="efficientnet_b3", pretrained_backbone=False, backbone_weights_path="/tmp/b3.pth")
-    assert saved.pretrained_backbone  # what earlier checkpoints saved next to the path still means "load it"
+    implied = RT1Config(preset="rt1", backbone_weights_path="/tmp/b3.pth")
+    assert implied.pretrained_backbone  # the path implies it, the preset's False does not win
+    for explicit in (dict(preset="rt1"), dict(backbone="efficientnet_b3")):
+        with pytest.raises(ValueError, match="pretrained_backbone=false contradicts backbone_weights_path=/tmp/b3.pth"):
+            RT1Config(**explicit, pretrained_backbone=False, backbone_weights_path="/tmp/b3.pth")
+    with pytest.raises(ValueError, match="pretrained_backbone=false contradicts"):  # with features: when built
+        make_policy(backbone="efficientnet_b3", pretrained_backbone=False, backbone_weights_path="/tmp/b3.pth")
 
 
 def test_position_embeddings_start_at_the_image_tokens_scale():
@@ -392,6 +421,7 @@ def test_predict_action_chunk_leaves_the_history_unchanged(reuse):
 
 
 def test_language_processor_honours_language_dim_and_leaves_the_environment_alone(monkeypatch):
+    import sentence_transformers  # noqa: F401  (its imports, e.g. sklearn, set their own variables: not ours)
     from lerobot.configs import PipelineFeatureType
 
     from lerobot_factorworld.policies.rt1 import processor_rt1
@@ -402,18 +432,22 @@ def test_language_processor_honours_language_dim_and_leaves_the_environment_alon
     processor_rt1._CACHE.clear()
     stats = {"action": {"min": torch.full((4,), -1.0), "max": torch.ones(4)}}
     batch = {CAMERA: torch.rand(2, 3, 8, 8), "task": ["open the door", "close the door"]}
-    for dim in (384, 16):
-        policy = make_policy(language_dim=dim)
-        pre, _ = processor_rt1.make_rt1_pre_post_processors(policy.config, stats)
-        step = next(s for s in pre.steps if isinstance(s, processor_rt1.LanguageEmbeddingStep))
-        assert step.get_config()["language_dim"] == dim
-        features = step.transform_features({PipelineFeatureType.OBSERVATION: {}})
-        assert features[PipelineFeatureType.OBSERVATION][LANGUAGE_EMBEDDING_KEY].shape == (dim,)
-        if dim == 384:
-            embedding = pre(dict(batch))[LANGUAGE_EMBEDDING_KEY]
-            assert embedding.shape == (2, 384)
-            assert policy.select_action({**frame(2), LANGUAGE_EMBEDDING_KEY: embedding}).shape == (2, 4)
-        else:
-            with pytest.raises(ValueError, match="language_dim=16, but .* gives 384-d embeddings"):
-                pre(dict(batch))
+    policy = make_policy(language_dim=MINILM_DIM)
+    pre, _ = processor_rt1.make_rt1_pre_post_processors(policy.config, stats)
+    step = next(s for s in pre.steps if isinstance(s, processor_rt1.LanguageEmbeddingStep))
+    assert step.get_config()["language_dim"] == MINILM_DIM == policy.model.encoder.final_film.add.in_features
+    features = step.transform_features({PipelineFeatureType.OBSERVATION: {}})
+    assert features[PipelineFeatureType.OBSERVATION][LANGUAGE_EMBEDDING_KEY].shape == (MINILM_DIM,)
+    embedding = pre(dict(batch))[LANGUAGE_EMBEDDING_KEY]
+    assert embedding.shape == (2, MINILM_DIM)
+    assert policy.select_action({**frame(2), LANGUAGE_EMBEDDING_KEY: embedding}).shape == (2, 4)
+    step.language_dim = 16  # as a hand-edited policy_preprocessor.json would build it
+    with pytest.raises(ValueError, match="language_dim=16, but .* gives 384-d embeddings"):
+        pre(dict(batch))
     assert dict(os.environ) == environment
+
+
+def test_language_dim_is_checked_in_the_config():
+    for dim in (16, 512):
+        with pytest.raises(ValueError, match=f"language_dim={dim}, but .* gives 384-d embeddings; valid: 384"):
+            RT1Config(language_dim=dim)  # refused when parsed, before lerobot-train loads data or builds anything

@@ -7,6 +7,7 @@ from collections import Counter
 from pathlib import Path
 
 from .schema import ENV_ID_COLUMN, SPLIT_COLUMN
+from .version import data_version, describe_data_version
 
 
 def card_tags(settings: dict) -> list[str]:
@@ -32,6 +33,7 @@ def card_description(meta) -> str:
         f"- **Episodes:** {meta.total_episodes} ({dict(splits)}), **frames:** {meta.total_frames}, fps {meta.fps}",
         f"- **Cameras:** {settings['cameras']} at {settings['image_size']}x{settings['image_size']}; action noise std {settings['action_noise']}",
         f"- **Failed attempts** (discarded): {sum(sidecar['failures'].values())}",
+        f"- **Format:** {describe_data_version(data_version(settings))}",
         "",
         "Each episode row of `meta/episodes` holds `factorworld/env_id`, `factorworld/split` and one `factors/<name>` "
         "column per factor; `lerobot_factorworld.datasets.query` reads them back as typed values and selects episodes "

@@ -39,6 +39,8 @@ from ..validation import (
     check_tasks,
     split_list,
 )
+from .hub import check_push_settings
+from .version import DATA_VERSION, DATA_VERSION_KEY, data_version, describe_data_version
 
 MODES = ("new", "overwrite", "append")
 PLAN_FILE = "plan.json"
@@ -76,8 +78,9 @@ class CollectConfig:
             ``forkserver``), or ``fork`` / ``forkserver`` / ``spawn``.
         mode: ``new`` (refuses to touch a different existing dataset; resumes an identical one),
             ``overwrite`` (deletes what is at ``root``), ``append`` (adds these demos to it).
-        push_to_hub: Push with LeRobot's mechanism (card, tags) when done.
-        private: Push as a private dataset.
+        push_to_hub: Push with LeRobot's mechanism (card, tags) when done; a Hub ``repo_id`` (not
+            ``local/...``) and a Hugging Face token are checked before collecting.
+        private: Push as a private dataset (only with ``push_to_hub``).
         sampling: How factor values are drawn (``--sampling.n_distractors=2``, ``--sampling.texture_folder=...``).
     """
 
@@ -129,6 +132,7 @@ class CollectConfig:
         root = check_folder_target(self.root, "root")
         check_folder_target(staging_dir(root), "root's staging folder")
         check_repo_id(self.repo_id)
+        check_push_settings(self.repo_id, self.push_to_hub, self.private)
         check_at_least("workers", self.workers, 0)
         check_at_least("episodes_per_shard", self.episodes_per_shard, 1)
         check_choice("start_method", self.start_method, ("auto", *get_all_start_methods()))
@@ -143,11 +147,11 @@ class CollectConfig:
         return tuple(split_list(self.cameras))
 
     def fingerprint(self) -> dict[str, Any]:
-        """The settings that determine the collected data."""
+        """The settings that determine the collected data, with the version of what the data means."""
         settings = asdict(self)
         for key in (*RUN_ONLY_SETTINGS, "root"):
             settings.pop(key)
-        return settings
+        return {**settings, DATA_VERSION_KEY: DATA_VERSION}
 
 
 @dataclass(frozen=True)
@@ -321,6 +325,10 @@ def _prepare(cfg: CollectConfig, root: Path, parts: Path) -> None:
             f"{root} is not empty and holds no factorworld dataset (no {SIDECAR}); nothing was changed. "
             "Choose another --root (a new or empty folder)"
         )
+    staged = json.loads(plan_path.read_text()) if plan_path.is_file() else None
+    if cfg.mode != "overwrite":
+        _check_data_version(previous, f"{root} holds", "collect into another --root or pass --mode=overwrite")
+        _check_data_version(staged, f"the unfinished collection staged in {parts} is", "pass --mode=overwrite")
     if cfg.mode == "append" and previous is not None:
         _check_appendable(previous["settings"], fingerprint, root)
     if cfg.mode == "overwrite":
@@ -336,8 +344,7 @@ def _prepare(cfg: CollectConfig, root: Path, parts: Path) -> None:
             )
         if not list(parts.glob("*")):
             raise FileExistsError(f"{root} is already complete with these settings; use --mode=append to add more")
-    if plan_path.is_file():
-        staged = json.loads(plan_path.read_text())
+    if staged is not None and cfg.mode != "overwrite":
         if staged["settings"] != fingerprint:
             raise FileExistsError(
                 f"an unfinished collection with other settings is staged in {parts} "
@@ -346,6 +353,18 @@ def _prepare(cfg: CollectConfig, root: Path, parts: Path) -> None:
             )
     parts.mkdir(parents=True, exist_ok=True)
     _atomic_write(plan_path, json.dumps({"settings": fingerprint, "mode": cfg.mode}, indent=1, sort_keys=True))
+
+
+def _check_data_version(recorded: dict | None, what: str, fix: str) -> None:
+    """Never mix data whose columns mean different things (e.g. ``observation.state`` in another frame)."""
+    if recorded is None:
+        return
+    version = data_version(recorded["settings"])
+    if version != DATA_VERSION:
+        raise FileExistsError(
+            f"{what} {describe_data_version(version)}, but this version of lerobot_factorworld writes "
+            f"{describe_data_version(DATA_VERSION)}; nothing was changed. Data of two versions never mix: {fix}"
+        )
 
 
 # Settings that fix the dataset's features: LeRobot can only merge datasets that agree on them.
@@ -376,9 +395,10 @@ def run_job(job: Job, settings: dict, parts_dir: str) -> dict:
     from ..envs.factor_env import CONTROL_FPS, FactorWorldEnv
     from ..experts import expert_action, expert_policy
     from ..factors.values import SceneConfig
-    from .schema import ENV_ID_COLUMN, SPLIT_COLUMN, encode_factors, frame_features
+    from .schema import ENV_ID_COLUMN, SPLIT_COLUMN, encode_episode, encode_factors, frame_features
 
-    cfg = CollectConfig(**{**settings, "sampling": SamplingOptions(**settings["sampling"])})
+    worker = {"push_to_hub": False, "private": False}  # the main process pushes (and checked the token)
+    cfg = CollectConfig(**{**settings, **worker, "sampling": SamplingOptions(**settings["sampling"])})
     parts = Path(parts_dir)
     tmp, final = parts / f"{job.job_id}.tmp", parts / job.job_id
     if tmp.exists():
@@ -431,6 +451,7 @@ def run_job(job: Job, settings: dict, parts_dir: str) -> dict:
             episode_columns.update(
                 {ENV_ID_COLUMN: config.env_id, SPLIT_COLUMN: config.split, **encode_factors(info["factors"])}
             )
+            episode_columns.update(encode_episode(info, env.task_description))  # the episode's instruction
             episode_columns["factorworld/seed"] = seed
             episode_columns["factorworld/demo"] = demo
             dataset.save_episode()

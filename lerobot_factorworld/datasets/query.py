@@ -6,11 +6,16 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-from .schema import ENV_ID_COLUMN, SPLIT_COLUMN, decode_factors
+from .schema import ENV_ID_COLUMN, SPLIT_COLUMN, decode_episode, decode_factors
+
+EPISODE_FIELDS = ("instruction", "target")
+"""Episode fields ``select_episodes`` matches besides factors (``target="red_mug"``)."""
 
 
 def episode_records(repo_id: str, root: str | Path) -> list[dict[str, Any]]:
-    """One record per episode: index, env_id, split, task, length and typed ``factors``."""
+    """One record per episode: index, env_id, split, task, length, typed ``factors``, and the episode's
+    ``instruction``, ``target`` and ``objects`` (a pick episode's named object and scene; see
+    :func:`~lerobot_factorworld.datasets.schema.decode_episode`)."""
     from lerobot.datasets.lerobot_dataset import LeRobotDatasetMetadata
 
     root = Path(root)
@@ -27,6 +32,7 @@ def episode_records(repo_id: str, root: str | Path) -> list[dict[str, Any]]:
                 "tasks": list(row["tasks"]),
                 "length": int(row["length"]),
                 "factors": decode_factors(row),
+                **decode_episode(row),
             }
         )
     return records
@@ -36,14 +42,16 @@ def select_episodes(
     repo_id: str, root: str | Path, where: Callable[[dict], bool] | None = None, **equals: Any
 ) -> list[int]:
     """Episode indices whose factors match: ``select_episodes(id, root, table_texture="proc:wood-003")``
-    or any predicate on the typed factor dict (``where=lambda f: f["light"][0] > 0.5``)."""
+    or any predicate on the typed factor dict (``where=lambda f: f["light"][0] > 0.5``); ``target=`` and
+    ``instruction=`` select pick episodes by their named object or instruction."""
     from ..factors.registry import check_factor_names
 
-    check_factor_names(equals)
+    check_factor_names([k for k in equals if k not in EPISODE_FIELDS])
     out = []
     for record in episode_records(repo_id, root):
         factors = record["factors"]
-        if all(_same(factors[k], v) for k, v in equals.items()) and (where is None or where(factors)):
+        values = {**factors, **{k: record[k] for k in EPISODE_FIELDS}}
+        if all(_same(values[k], v) for k, v in equals.items()) and (where is None or where(factors)):
             out.append(record["episode_index"])
     return out
 

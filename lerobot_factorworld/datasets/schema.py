@@ -1,7 +1,9 @@
 """The dataset's schema: frame features derived from the env, and typed per-episode factor columns.
 
-Every episode row of ``meta/episodes`` carries ``factorworld/env_id``, ``factorworld/split`` and one
-``factors/<name>`` column per factor (the values the scene really had). Column types are fixed per
+Every episode row of ``meta/episodes`` carries ``factorworld/env_id``, ``factorworld/split``, the
+episode's ``factorworld/instruction``, ``factorworld/target`` (the named object of a ``pick`` episode,
+else empty) and ``factorworld/objects`` (a pick scene's objects and their poses as a JSON list, else
+``[]``), and one ``factors/<name>`` column per factor (the values the scene really had). Column types are fixed per
 factor so that every parquet file has one schema: vectors are lists of floats, scalars floats
 (NaN when the factor does not apply to the task), assets strings ("" when not applicable) and
 distractors a JSON list. :func:`decode_factors` turns a row back into typed values.
@@ -22,6 +24,9 @@ FACTOR_PREFIX = "factors/"
 META_PREFIX = "factorworld/"
 ENV_ID_COLUMN = META_PREFIX + "env_id"
 SPLIT_COLUMN = META_PREFIX + "split"
+INSTRUCTION_COLUMN = META_PREFIX + "instruction"
+TARGET_COLUMN = META_PREFIX + "target"
+OBJECTS_COLUMN = META_PREFIX + "objects"
 STATE_NAMES = ["x", "y", "z", "gripper", "prev_x", "prev_y", "prev_z", "prev_gripper"]
 ACTION_NAMES = ["dx", "dy", "dz", "grip"]
 
@@ -56,6 +61,26 @@ def encode_factors(factors: dict[str, Any]) -> dict[str, Any]:
         else:
             out[FACTOR_PREFIX + name] = json.dumps([_object_dict(v) for v in value or ()], sort_keys=True)
     return out
+
+
+def encode_episode(info: dict[str, Any], instruction: str) -> dict[str, Any]:
+    """An episode's instruction and, for a pick episode, its named object and objects -> columns."""
+    pick = info.get("pick") or {}
+    return {
+        INSTRUCTION_COLUMN: instruction,
+        TARGET_COLUMN: pick.get("target", ""),
+        OBJECTS_COLUMN: json.dumps(pick.get("objects", []), sort_keys=True),
+    }
+
+
+def decode_episode(row: dict[str, Any]) -> dict[str, Any]:
+    """``instruction``, ``target`` (``None`` outside the pick family) and ``objects`` (dicts with ``name``,
+    ``x``, ``y``, ``yaw``) of an episode row; ``None``/``[]`` for datasets collected before these columns."""
+    return {
+        "instruction": row.get(INSTRUCTION_COLUMN),
+        "target": row.get(TARGET_COLUMN) or None,
+        "objects": json.loads(row.get(OBJECTS_COLUMN) or "[]"),
+    }
 
 
 def decode_factors(row: dict[str, Any]) -> dict[str, Any]:

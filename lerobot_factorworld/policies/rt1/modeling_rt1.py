@@ -129,6 +129,11 @@ class RT1Policy(PreTrainedPolicy):
         """``load_backbone_weights=False`` skips reading the ImageNet weights (``from_pretrained`` restores them)."""
         super().__init__(config)
         config.validate_features()
+        if config.backbone_weights_path and not config.pretrained_backbone:
+            if load_backbone_weights:  # a fresh build would have to choose between the two settings
+                raise ValueError(config.backbone_start_contradiction())
+            # A checkpoint of older code, which saved the preset's False next to the file it started from.
+            config.pretrained_backbone = True
         self.config = config
         self.camera_keys = sorted(config.image_features)
         self.action_dim = config.action_feature.shape[0]

