@@ -3,7 +3,7 @@ VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 
-.PHONY: setup demo test test-fast lint bench
+.PHONY: setup demo contact-sheet test test-fast lint bench
 
 setup: $(STAMP)
 
@@ -11,8 +11,13 @@ $(STAMP): pyproject.toml scripts/setup.sh
 	bash scripts/setup.sh
 	touch $(STAMP)
 
-# The main job (for now): a contact sheet of pick-place under every factor of variation.
+# The main job: the quick generalization-gap study (collect, train, evaluate, report) in about 10 minutes
+# on 2 cores; writes outputs/study/quick/report.md, results.csv and the plots. Rerunning reuses its steps.
 demo: setup
+	MUJOCO_GL=egl $(BIN)/factorworld study --config configs/study/quick.yaml
+
+# A contact sheet of pick-place under every factor of variation.
+contact-sheet: setup
 	$(BIN)/factorworld contact-sheet --task=pick-place --out=outputs/contact_sheet.png
 
 # The whole suite (real MuJoCo scenes, real lerobot-eval), on all cores.
@@ -29,3 +34,4 @@ bench: setup
 	$(BIN)/python scripts/bench_env.py
 	$(BIN)/python scripts/bench_collect.py
 	$(BIN)/python scripts/bench_policy.py
+	$(BIN)/python scripts/bench_bc.py

@@ -8,15 +8,26 @@ Commands:
     contact-sheet   render a task under every factor (PNG)
     collect         scripted demos -> LeRobotDataset with per-episode factor values (resumable)
     rt1-presets     the RT-1 presets and their parameter counts
+    study           the generalization-gap study: collect, train, evaluate, report (--config=FILE.yaml, --dry-run)
+
+Every command reads its settings with :func:`lerobot_factorworld.cli_errors.parse_config` (draccus +
+the config's ``__post_init__`` validation), so a bad setting ends in one ``error: ...`` line naming the
+valid choices (exit status 2) before any work starts; see that module for how to add a command.
 """
 
 from __future__ import annotations
 
 import sys
+import typing
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
-import draccus
+from .cli_errors import SettingError, one_line, parse_config
+from .factors.sampling import SamplingOptions
+from .validation import check_at_least, check_factors, check_output_file, check_seed, check_split, check_tasks
+
+SETTING_ERROR_STATUS = 2  # like argparse: the command line was wrong, nothing was done
+FAILURE_STATUS = 1  # the settings were valid but the work was refused or failed
 
 
 @dataclass
@@ -30,6 +41,8 @@ class SampleConfig:
         split: ``train`` or ``eval`` asset split.
         factors: Factors to vary (default: the paper's seven).
         out: JSON file to write (nothing is written when empty).
+        sampling: How factor values are drawn, as for ``collect`` (``--sampling.asset_split=variant``,
+            ``--sampling.texture_folder=...``, ``--sampling.n_distractors=2``, ...).
     """
 
     task: str = "pick-place"
@@ -38,16 +51,35 @@ class SampleConfig:
     split: str = "train"
     factors: list[str] = field(default_factory=list)
     out: str = ""
+    sampling: SamplingOptions = field(default_factory=SamplingOptions)
+
+    def __post_init__(self) -> None:
+        from .factors.registry import PAPER_STUDY_FACTORS
+
+        (self.task,) = check_tasks([self.task])
+        check_at_least("n", self.n, 1)
+        check_seed(self.seed)
+        check_split(self.split)
+        check_factors(self.factors or PAPER_STUDY_FACTORS, [self.task])
+        if self.out:
+            check_output_file(self.out, "out")
 
 
-def cmd_tasks(_: list[str]) -> None:
+def no_settings(command: str, args: list[str]) -> None:
+    if any(arg not in ("-h", "--help") for arg in args):
+        raise SettingError(f"factorworld {command} takes no settings, got {' '.join(args)}")
+
+
+def cmd_tasks(args: list[str]) -> None:
+    no_settings("tasks", args)
     from .tasks import TASKS
 
     for task in TASKS.values():
         print(f"{task.name:28s} {task.gym_id:40s} {task.instruction}")
 
 
-def cmd_factors(_: list[str]) -> None:
+def cmd_factors(args: list[str]) -> None:
+    no_settings("factors", args)
     from .factors.registry import FACTORS, support_matrix_markdown
 
     print("| factor | paper name | kind | visual | ranges |\n|---|---|---|---|---|")
@@ -64,7 +96,8 @@ def cmd_factors(_: list[str]) -> None:
             print(f"- {task.name}: {name} in {list(low)} .. {list(high)}")
 
 
-def cmd_cameras(_: list[str]) -> None:
+def cmd_cameras(args: list[str]) -> None:
+    no_settings("cameras", args)
     from .scene.cameras import CAMERAS
 
     for cam in CAMERAS.values():
@@ -76,8 +109,8 @@ def cmd_sample(args: list[str]) -> None:
     from .factors.sampling import sample_configs
     from .factors.values import save_configs
 
-    cfg = draccus.parse(SampleConfig, args=args)
-    configs = sample_configs(cfg.task, cfg.n, cfg.seed, cfg.split, cfg.factors or PAPER_STUDY_FACTORS)
+    cfg = parse_config(SampleConfig, args, "sample")
+    configs = sample_configs(cfg.task, cfg.n, cfg.seed, cfg.split, cfg.factors or PAPER_STUDY_FACTORS, cfg.sampling)
     for config in configs:
         print(config)
     if cfg.out:
@@ -87,24 +120,61 @@ def cmd_sample(args: list[str]) -> None:
 def cmd_contact_sheet(args: list[str]) -> None:
     from .contact_sheet import ContactSheetConfig, render_contact_sheet
 
-    cfg = draccus.parse(ContactSheetConfig, args=args)
+    cfg = parse_config(ContactSheetConfig, args, "contact-sheet")
     print(f"wrote {render_contact_sheet(cfg)}")
 
 
 def cmd_collect(args: list[str]) -> None:
     from .datasets.collect import CollectConfig, collect
 
-    cfg = draccus.parse(CollectConfig, args=args)
+    cfg = parse_config(CollectConfig, args, "collect")
     report = collect(cfg)
     print(f"wrote {report.episodes} episodes ({report.frames} frames) to {report.root} in {report.seconds:.1f} s")
     for env, count in report.failures.items():
         print(f"  {env}: {count} failed attempt(s) discarded")
 
 
-def cmd_rt1_presets(_: list[str]) -> None:
+def cmd_rt1_presets(args: list[str]) -> None:
+    no_settings("rt1-presets", args)
     from .policies.rt1.presets import preset_table
 
     print(preset_table())
+
+
+STUDY_FLAG_ALIASES = {"--config": "--config_path", "--dry-run": "--dry_run=true"}
+
+
+def cmd_study(args: list[str]) -> None:
+    from .study.config import StudyConfig
+    from .study.runner import run_study
+
+    command = "factorworld study " + " ".join(args)
+    cfg = parse_config(StudyConfig, [_study_alias(arg) for arg in args], "study")
+    outcome = run_study(cfg, command=command)
+    if isinstance(outcome, str):  # --dry-run
+        print(outcome)
+        return
+    ran = ", ".join(f"{n} {kind}" for kind, n in outcome.ran.items())
+    cached = ", ".join(f"{n} {kind}" for kind, n in outcome.cached.items())
+    print(f"ran {ran}; cached {cached}")
+    print(f"wrote {outcome.results}, {outcome.report} and {len(outcome.plots)} plot(s)")
+    if outcome.failed:
+        for label, error in outcome.failed.items():
+            print(f"failed: {label}: {one_line(error)[:300]}", file=sys.stderr)
+        _fail(
+            RuntimeError(
+                f"{len(outcome.failed)} step(s) failed and {outcome.skipped} were skipped (errors in "
+                f"{outcome.study_dir}/steps/*/*/error.txt); rerun the same command to retry them"
+            ),
+            FAILURE_STATUS,
+        )
+
+
+def _study_alias(arg: str) -> str:
+    name, sep, value = arg.partition("=")
+    if name == "--config":
+        return f"--config_path={value}" if sep else "--config_path"
+    return STUDY_FLAG_ALIASES.get(arg, arg)
 
 
 COMMANDS: dict[str, Callable[[list[str]], None]] = {
@@ -115,21 +185,30 @@ COMMANDS: dict[str, Callable[[list[str]], None]] = {
     "contact-sheet": cmd_contact_sheet,
     "collect": cmd_collect,
     "rt1-presets": cmd_rt1_presets,
+    "study": cmd_study,
 }
 
 
 def main(argv: list[str] | None = None) -> None:
+    """Run one command; a bad setting or a refusal prints one ``error: ...`` line and exits non-zero."""
     argv = list(sys.argv[1:] if argv is None else argv)
     if not argv or argv[0] in ("-h", "--help"):
         print(__doc__)
         return
     command, args = argv[0], argv[1:]
-    if command not in COMMANDS:
-        raise SystemExit(f"unknown command {command!r}; valid commands: {', '.join(COMMANDS)}")
     try:
+        if command not in COMMANDS:
+            raise SettingError(f"unknown command {command!r}; valid commands: {', '.join(COMMANDS)}")
         COMMANDS[command](args)
-    except (ValueError, FileNotFoundError, FileExistsError) as err:
-        raise SystemExit(f"error: {err}") from None
+    except SettingError as err:
+        _fail(err, SETTING_ERROR_STATUS)
+    except (ValueError, OSError) as err:  # e.g. a refusal to touch a dataset collected with other settings
+        _fail(err, FAILURE_STATUS)
+
+
+def _fail(err: BaseException, status: int) -> typing.NoReturn:
+    print(f"error: {one_line(str(err))}", file=sys.stderr)
+    raise SystemExit(status)
 
 
 if __name__ == "__main__":

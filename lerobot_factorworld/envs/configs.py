@@ -18,10 +18,23 @@ from lerobot.utils.constants import ACTION, OBS_IMAGES, OBS_STATE
 from ..factors.registry import PAPER_STUDY_FACTORS
 from ..factors.sampling import SamplingOptions
 from ..tasks import get_task
+from ..validation import (
+    check_asset_folders,
+    check_at_least,
+    check_cameras,
+    check_factors,
+    check_image_size,
+    check_input_file,
+    check_quality,
+    check_seed,
+    check_tasks,
+)
 from .factor_env import CONTROL_FPS, FactorWorldEnv
 
 AGENT_POS_DIM = 8
 ACTION_DIM = 4
+DEFAULT_N_TRAIN_ENVS = 5
+DEFAULT_ENV_SEED = 0
 
 
 @EnvConfig.register_subclass("factorworld")
@@ -36,15 +49,23 @@ class FactorWorldEnvConfig(EnvConfig):
         image_size: Square image side in pixels.
         quality: ``fast`` (CPU-friendly, default) or ``full`` (Meta-World's shadows and multisampling).
         episode_length: Step limit; ``None`` uses each task's horizon.
-        n_train_envs: Number of training environments N.
-        train_factors: Factors varied across the training environments (default: the paper's seven).
-        shifts: Evaluation conditions besides ``train``: factor names or pairs ``a+b``.
-        n_test_envs: Test environments per shifted condition (the paper uses 100).
-        seed: Seed of the environment sampling (episode seeds come from ``--seed``).
+        n_train_envs: Number of training environments N (default 5, or the dataset's).
+        train_factors: Factors varied across the training environments (default: the paper's seven, or
+            the dataset's).
+        shifts: Evaluation conditions besides ``train``: factor names or pairs ``a+b``; for the ``pick``
+            family also ``held_out_phrasings`` and ``held_out_objects`` (docs/pick.md).
+        n_test_envs: Test environments per shifted condition (the paper uses 100; a multiple of N keeps
+            every test environment paired with the training environment it derives from).
+        seed: Seed of the environment sampling (default 0, or the dataset's; episode seeds come from
+            ``--seed``). A condition's test environments depend only on this seed and its factor names.
+        dataset_root: A Factor World dataset (``factorworld collect``) whose training environments are the
+            ``train`` condition: N, factors, seed and sampling widths are read from its
+            ``meta/factorworld.json``; settings given explicitly must agree with it.
         include_train: Also evaluate on the training environments (needed for the generalization gap).
         configs_path: JSON file of training configurations (``factorworld sample`` writes one) to use
             instead of sampling them.
-        sampling: How factor values are drawn (``--env.sampling.widths='{camera_pos: wide}'``, ...).
+        sampling: How factor values are drawn (``--env.sampling.widths='{camera_pos: wide}'``, ...);
+            ``widths.object_pos`` (narrow / medium) is also the range of the per-episode object start.
     """
 
     task: str = "pick-place"
@@ -53,11 +74,12 @@ class FactorWorldEnvConfig(EnvConfig):
     image_size: int = 84
     quality: str = "fast"
     episode_length: int | None = None
-    n_train_envs: int = 5
-    train_factors: list[str] = field(default_factory=lambda: list(PAPER_STUDY_FACTORS))
+    n_train_envs: int | None = None
+    train_factors: list[str] | None = None
     shifts: list[str] = field(default_factory=list)
     n_test_envs: int = 100
-    seed: int = 0
+    seed: int | None = None
+    dataset_root: str | None = None
     include_train: bool = True
     configs_path: str | None = None
     sampling: SamplingOptions = field(default_factory=SamplingOptions)
@@ -65,8 +87,8 @@ class FactorWorldEnvConfig(EnvConfig):
     features_map: dict[str, str] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
-        for name in self.task_names:
-            get_task(name)
+        self._resolve_train_condition()
+        self._validate()
         self.features = {
             ACTION: PolicyFeature(type=FeatureType.ACTION, shape=(ACTION_DIM,)),
             "agent_pos": PolicyFeature(type=FeatureType.STATE, shape=(AGENT_POS_DIM,)),
@@ -77,18 +99,83 @@ class FactorWorldEnvConfig(EnvConfig):
                 type=FeatureType.VISUAL, shape=(self.image_size, self.image_size, 3)
             )
             self.features_map[f"pixels/{cam}"] = f"{OBS_IMAGES}.{cam}"
+
+    def _validate(self) -> None:
+        """Refuse bad settings when the config is parsed, so ``lerobot-eval`` fails before building a policy."""
+        from ..pick.sampling import CONDITIONS as LANGUAGE_CONDITIONS
+        from ..pick.sampling import check_condition
+        from ..study.conditions import PAIR_SEPARATOR, parse_shift
+
+        tasks = check_tasks(self.task)
+        check_cameras(self.cameras)
+        check_image_size(self.image_size)
+        check_quality(self.quality)
+        if self.fps != CONTROL_FPS:
+            raise ValueError(f"fps is fixed by the simulator's control rate ({CONTROL_FPS}), got {self.fps}")
+        if self.episode_length is not None:
+            check_at_least("episode_length", self.episode_length, 1)
+        check_at_least("n_train_envs", self.n_train_envs, 1)
+        check_at_least("n_test_envs", self.n_test_envs, 1)
+        check_seed(self.seed)
+        check_asset_folders(self.sampling.texture_folder, self.sampling.shape_folder)
+        check_factors(self.train_factors, tasks, "train_factors")
+        conditions = [PAIR_SEPARATOR.join(parse_shift(shift)) for shift in self.shifts]
+        for condition in conditions:
+            if condition in LANGUAGE_CONDITIONS:
+                check_condition(condition, tasks)
+                continue
+            check_factors(condition.split(PAIR_SEPARATOR), tasks, f"shift {condition!r}")
+        if len(set(conditions)) != len(conditions):
+            raise ValueError(f"shifts lists a condition more than once: {self.shifts}")
         if not self.include_train and not self.shifts:
             raise ValueError("nothing to evaluate: include_train=false and no shifts given")
+        if self.configs_path:
+            self._check_configs_file(tasks)
+
+    def _check_configs_file(self, tasks: list[str]) -> None:
+        from ..factors.values import load_configs
+
+        path = check_input_file(self.configs_path, "configs_path")
+        try:
+            configs = load_configs(path)
+        except (ValueError, KeyError, TypeError) as err:
+            raise ValueError(f"configs_path {path} holds no valid configurations ({err})") from None
+        missing = [task for task in tasks if not any(c.task == task for c in configs)]
+        if missing:
+            raise ValueError(f"configs_path {path} holds no configuration for task(s) {', '.join(missing)}")
+
+    def _resolve_train_condition(self) -> None:
+        """Fill N, factors, seed and sampling from ``dataset_root`` (refusing disagreements) or the defaults."""
+        if self.dataset_root is None:
+            self.n_train_envs = DEFAULT_N_TRAIN_ENVS if self.n_train_envs is None else self.n_train_envs
+            self.train_factors = list(PAPER_STUDY_FACTORS) if self.train_factors is None else self.train_factors
+            self.seed = DEFAULT_ENV_SEED if self.seed is None else self.seed
+            return
+        from ..study.conditions import check_against_dataset, read_dataset_condition
+
+        dataset = read_dataset_condition(self.dataset_root)
+        explicit_sampling = None if self.sampling == SamplingOptions() else self.sampling
+        check_against_dataset(
+            dataset,
+            {
+                "n_train_envs": self.n_train_envs,
+                "train_factors": self.train_factors,
+                "seed": self.seed,
+                "sampling": explicit_sampling,
+            },
+        )
+        for name in self.task_names:
+            dataset.train_configs(name)  # raises when the dataset holds no environment of this task
+        self.n_train_envs, self.train_factors, self.seed = dataset.n_envs, list(dataset.factors), dataset.seed
+        self.sampling = dataset.sampling
 
     @property
     def task_names(self) -> list[str]:
-        return [t.strip() for t in (self.task or "").split(",") if t.strip()]
+        return check_tasks(self.task)
 
     @property
     def camera_names(self) -> tuple[str, ...]:
-        from ..scene.cameras import check_camera_names
-
-        return check_camera_names([c.strip() for c in self.cameras.split(",") if c.strip()])
+        return check_cameras(self.cameras)
 
     @property
     def gym_kwargs(self) -> dict:
@@ -97,15 +184,18 @@ class FactorWorldEnvConfig(EnvConfig):
             "image_size": self.image_size,
             "quality": self.quality,
             "max_episode_steps": self.episode_length,
+            "object_pos_width": self.sampling.widths.get("object_pos"),
         }
 
     def suites(self, task: str) -> dict:
         """Evaluation conditions -> scene configurations for ``task``."""
         from ..factors.values import load_configs
-        from ..study.plan import TRAIN_SUITE, evaluation_suites
+        from ..study.conditions import TRAIN_SUITE, evaluation_suites, read_dataset_condition
 
         train_configs = None
-        if self.configs_path:
+        if self.dataset_root:
+            train_configs = read_dataset_condition(self.dataset_root).train_configs(get_task(task).name)
+        elif self.configs_path:
             train_configs = [c for c in load_configs(self.configs_path) if c.task == get_task(task).name]
             if not train_configs:
                 raise ValueError(f"{self.configs_path} holds no configuration for task {task!r}")
@@ -124,13 +214,16 @@ class FactorWorldEnvConfig(EnvConfig):
         return suites
 
     def create_envs(self, n_envs: int, use_async_envs: bool = False) -> dict[str, dict[int, gym.vector.VectorEnv]]:
-        vector_cls = gym.vector.AsyncVectorEnv if (use_async_envs and n_envs > 1) else gym.vector.SyncVectorEnv
-        extra = {"context": "forkserver"} if vector_cls is gym.vector.AsyncVectorEnv else {}
+        from ..study.conditions import checked_vector_env
+
+        base_cls = gym.vector.AsyncVectorEnv if (use_async_envs and n_envs > 1) else gym.vector.SyncVectorEnv
+        extra = {"context": "forkserver"} if base_cls is gym.vector.AsyncVectorEnv else {}
+        vector_cls = checked_vector_env(base_cls)  # logs how the seeded episodes covered the environments
         out: dict[str, dict[int, gym.vector.VectorEnv]] = {}
         for task_id, task in enumerate(self.task_names):
             for suite, configs in self.suites(task).items():
                 make = partial(FactorWorldEnv, task, tuple(configs), **self.gym_kwargs)
-                out.setdefault(suite, {})[task_id] = vector_cls(
-                    [make] * n_envs, autoreset_mode=gym.vector.AutoresetMode.SAME_STEP, **extra
-                )
+                vec = vector_cls([make] * n_envs, autoreset_mode=gym.vector.AutoresetMode.SAME_STEP, **extra)
+                vec.setup_coverage(f"{task}/{suite}", len(configs))
+                out.setdefault(suite, {})[task_id] = vec
         return out

@@ -1,0 +1,279 @@
+"""``factorworld study --config configs/study/<name>.yaml``: the settings of a generalization-gap study.
+
+A study is the grid methods x tasks x N x seeds, each cell trained on its own dataset and evaluated on
+the conditions: ``train``, every factor in ``factors``, the ``pairs``, and the radius sweep (camera and
+table position sampled, for training and test alike, from radii 0.025 / 0.05 / 0.075 m). Everything is
+checked here, before any work starts.
+"""
+
+from __future__ import annotations
+
+import itertools
+import logging
+from dataclasses import dataclass, field
+from typing import Any
+
+from ..factors.registry import PAPER_STUDY_FACTORS, WIDTHS, check_task_support, get_factor
+from ..tasks import get_task
+from .conditions import PAIR_SEPARATOR, condition_name, parse_shift
+
+EXECUTORS = ("local", "ray")
+ALL_PAIRS = "all"
+RADIUS_FACTORS = ("camera_pos", "table_pos")
+RADII_M = {"narrow": 0.025, "medium": 0.05, "wide": 0.075}  # the paper's radii (appendix table)
+
+
+@dataclass
+class MethodConfig:
+    """A method = a LeRobot policy type and its overrides, e.g. ``{type: bc, augmentation: shift}``.
+
+    Attributes:
+        name: Name in the results (``method`` column), e.g. ``bc_shift``.
+        policy: ``--policy.<key>=<value>`` settings for ``lerobot-train``; ``type`` is required.
+    """
+
+    name: str = "rt1_small"
+    policy: dict[str, Any] = field(default_factory=lambda: {"type": "rt1", "preset": "small"})
+
+    def __post_init__(self) -> None:
+        if "type" not in self.policy:
+            raise ValueError(f"method {self.name!r} needs policy.type (a LeRobot policy type such as bc, rt1, act)")
+
+
+def check_policy(method: MethodConfig) -> None:
+    """The method's policy type exists and accepts its overrides (as ``lerobot-train`` will parse them)."""
+    import draccus
+    from lerobot.configs.policies import PreTrainedConfig
+
+    from .. import lerobot_plugin  # noqa: F401 - registers bc and rt1
+
+    kind = method.policy["type"]
+    if kind not in PreTrainedConfig.get_known_choices():
+        known = ", ".join(sorted(PreTrainedConfig.get_known_choices()))
+        raise ValueError(f"method {method.name!r}: unknown policy type {kind!r}; valid types: {known}")
+    overrides = {k: v for k, v in method.policy.items() if k != "type"}
+    quiet = logging.getLogger()
+    level, quiet.level = quiet.level, logging.ERROR  # constructing a config logs device warnings
+    try:
+        draccus.decode(PreTrainedConfig.get_choice_class(kind), overrides)
+    except Exception as err:  # draccus reports unknown fields and bad values; the innermost cause says why
+        while err.__cause__ is not None:
+            err = err.__cause__
+        raise ValueError(f"method {method.name!r}: bad policy settings {overrides}: {err}") from None
+    finally:
+        quiet.level = level
+
+
+@dataclass
+class CollectSettings:
+    """Scripted demonstrations per (task, N, seed) dataset (``factorworld collect``).
+
+    Attributes:
+        demos: Successful demos per dataset (spread evenly over the N environments).
+        demos_per_task: Per-task override of ``demos`` (the paper: pick-place 2000, others 1000).
+        cameras: Cameras stored and given to the policy.
+        image_size: Square image side in pixels (the paper: 84).
+        use_videos: Store frames as MP4 (smaller) or PNG in parquet (faster to train from).
+        action_noise: Std of the expert's Gaussian action noise.
+        max_episode_steps: Demo step limit (``None``: the task's horizon).
+        object_pos_width: Range of the per-episode object start (``narrow`` / ``medium``), for
+            collection and evaluation alike.
+        n_distractors: Distractor objects per environment.
+        workers: Worker processes of one collection.
+    """
+
+    demos: int = 50
+    demos_per_task: dict[str, int] = field(default_factory=dict)
+    cameras: str = "front"
+    image_size: int = 84
+    use_videos: bool = False
+    action_noise: float = 0.002
+    max_episode_steps: int | None = None
+    object_pos_width: str = "narrow"
+    n_distractors: int = 1
+    workers: int = 1
+
+    def demos_for(self, task: str) -> int:
+        return int(self.demos_per_task.get(task, self.demos))
+
+
+@dataclass
+class TrainSettings:
+    """``lerobot-train`` settings shared by every method.
+
+    Attributes:
+        steps: Gradient steps (ignored when ``epochs`` is set).
+        epochs: Passes over the dataset's frames (the paper: 100); steps = ceil(epochs * frames / batch).
+        batch_size: Batch size.
+        threads: Torch CPU threads per training run (fixed so that results do not depend on the machine).
+        device: ``cpu`` or ``cuda``.
+        extra_args: More ``lerobot-train`` flags, e.g. ``["--optimizer.lr=3e-4"]``.
+    """
+
+    steps: int = 1000
+    epochs: float | None = None
+    batch_size: int = 32
+    threads: int = 1
+    device: str = "cpu"
+    extra_args: list[str] = field(default_factory=list)
+
+
+@dataclass
+class EvalSettings:
+    """Evaluation of every checkpoint on every condition (LeRobot's ``eval_policy_all``).
+
+    Attributes:
+        n_test_envs: Test environments per shifted condition (the paper: 100); a multiple of every N.
+        episodes: Episodes per condition; a multiple of every N and of ``n_test_envs``.
+        start_seed: Episode ``i`` is reset with ``start_seed + i`` in every condition (paired).
+        max_episode_steps: Step limit of an episode (``None``: the task's horizon).
+        batch_size: Vectorised environments per evaluation (results do not depend on it).
+        threads: Torch CPU threads per evaluation.
+    """
+
+    n_test_envs: int = 10
+    episodes: int = 20
+    start_seed: int = 1000
+    max_episode_steps: int | None = None
+    batch_size: int = 1
+    threads: int = 1
+
+
+@dataclass
+class StudyConfig:
+    """A generalization-gap study.
+
+    Attributes:
+        name: Study name (in results and report).
+        out_dir: Study folder: ``results.csv``, ``report.md``, plots, and the cached steps (``steps/``).
+        tasks: Tasks.
+        n_train_envs: The N values (training environments per dataset).
+        seeds: Seeds; seed ``s`` samples the training and test environments and seeds training.
+        train_factors: Factors varied across the training environments (the paper's seven).
+        factors: Single-factor conditions.
+        pairs: Pair conditions: ``[all]`` (every pair of ``factors``) or a list of ``a+b``.
+        radius_factors: Factors of the radius sweep (``camera_pos``, ``table_pos``).
+        radius_widths: Widths of the sweep: narrow / medium / wide = radius 0.025 / 0.05 / 0.075 m.
+        methods: Methods (policy types and overrides).
+        collect: Demonstration settings.
+        train: Training settings.
+        eval: Evaluation settings.
+        executor: ``local`` (a process pool on this machine) or ``ray``.
+        workers: Steps run at once (local pool size, or concurrent Ray tasks).
+        ray_address: Ray cluster address (``None``: start a local Ray instance).
+        dry_run: Print the plan (steps per kind, cached, cost estimate) and stop.
+    """
+
+    name: str = "study"
+    out_dir: str = "outputs/study"
+    tasks: list[str] = field(default_factory=lambda: ["door-open"])
+    n_train_envs: list[int] = field(default_factory=lambda: [5])
+    seeds: list[int] = field(default_factory=lambda: [0])
+    train_factors: list[str] = field(default_factory=lambda: list(PAPER_STUDY_FACTORS))
+    factors: list[str] = field(default_factory=lambda: list(PAPER_STUDY_FACTORS))
+    pairs: list[str] = field(default_factory=list)
+    radius_factors: list[str] = field(default_factory=list)
+    radius_widths: list[str] = field(default_factory=lambda: list(WIDTHS))
+    methods: list[MethodConfig] = field(default_factory=lambda: [MethodConfig()])
+    collect: CollectSettings = field(default_factory=CollectSettings)
+    train: TrainSettings = field(default_factory=TrainSettings)
+    eval: EvalSettings = field(default_factory=EvalSettings)
+    executor: str = "local"
+    workers: int = 1
+    ray_address: str | None = None
+    dry_run: bool = False
+
+    def __post_init__(self) -> None:
+        self.methods = [m if isinstance(m, MethodConfig) else MethodConfig(**m) for m in self.methods]
+        self.validate()
+
+    # --- derived -----------------------------------------------------------------------------
+
+    def pair_conditions(self) -> list[str]:
+        if [p.strip() for p in self.pairs] == [ALL_PAIRS]:
+            return [condition_name(p) for p in itertools.combinations(self.factors, 2)]
+        return [condition_name(parse_shift(p)) for p in self.pairs]
+
+    def conditions(self) -> list[str]:
+        """The shifted conditions of the main grid (singles, then pairs)."""
+        return [*self.factors, *self.pair_conditions()]
+
+    def radius_variants(self) -> list[tuple[str, str]]:
+        """(factor, width) runs of the sweep whose width differs from the factor's default (those
+        reuse the main grid)."""
+        return [
+            (factor, width)
+            for factor in self.radius_factors
+            for width in self.radius_widths
+            if width != get_factor(factor).default_width
+        ]
+
+    # --- checks ------------------------------------------------------------------------------
+
+    def validate(self) -> None:
+        if not self.tasks or not self.n_train_envs or not self.seeds or not self.methods:
+            raise ValueError("a study needs at least one task, one N (n_train_envs), one seed and one method")
+        for task in self.tasks:
+            spec = get_task(task)
+            check_task_support(spec, [*self.train_factors, *self.factors, *self.radius_factors])
+        for name in self.factors:
+            get_factor(name)
+        unknown = [f for f in self.factors if f not in self.train_factors]
+        if unknown:
+            raise ValueError(
+                f"factor(s) {unknown} are shifted but not varied in training (train_factors: {self.train_factors})"
+            )
+        pairs = self.pair_conditions()
+        for pair in pairs:
+            if any(f not in self.factors for f in pair.split(PAIR_SEPARATOR)):
+                raise ValueError(f"pair {pair!r} names a factor that is not in factors {self.factors}")
+        for method in self.methods:
+            check_policy(method)
+        names = [m.name for m in self.methods]
+        if len(set(names)) != len(names):
+            raise ValueError(f"method names must be distinct, got {names}")
+        for factor in self.radius_factors:
+            if factor not in RADIUS_FACTORS:
+                raise ValueError(f"the radius sweep applies to {', '.join(RADIUS_FACTORS)}, got {factor!r}")
+            if factor not in self.factors:
+                raise ValueError(
+                    f"radius factor {factor!r} must also be in factors (its narrow radius is the main grid)"
+                )
+        for width in self.radius_widths:
+            if width not in RADII_M:
+                raise ValueError(f"unknown radius width {width!r}; valid: {', '.join(RADII_M)}")
+        get_factor("object_pos").range(self.collect.object_pos_width)  # raises naming the valid widths
+        if self.executor not in EXECUTORS:
+            raise ValueError(f"unknown executor {self.executor!r}; valid executors: {', '.join(EXECUTORS)}")
+        if self.workers < 1:
+            raise ValueError(f"workers must be at least 1, got {self.workers}")
+        if min(self.n_train_envs) < 1 or len(set(self.n_train_envs)) != len(self.n_train_envs):
+            raise ValueError(f"n_train_envs must be distinct positive numbers, got {self.n_train_envs}")
+        if len(set(self.seeds)) != len(self.seeds):
+            raise ValueError(f"seeds must be distinct, got {self.seeds}")
+        self._validate_episodes()
+        if self.train.epochs is None and self.train.steps < 1:
+            raise ValueError("train.steps must be at least 1 (or set train.epochs)")
+
+    def _validate_episodes(self) -> None:
+        ev = self.eval
+        if ev.episodes < 1 or ev.n_test_envs < 1 or ev.batch_size < 1:
+            raise ValueError("eval.episodes, eval.n_test_envs and eval.batch_size must be at least 1")
+        for n in self.n_train_envs:
+            if ev.n_test_envs % n:
+                raise ValueError(
+                    f"eval.n_test_envs={ev.n_test_envs} must be a multiple of every N (got N={n}), so that each "
+                    "test environment is paired with the training environment the same episode sees"
+                )
+            if ev.episodes % n:
+                raise ValueError(f"eval.episodes={ev.episodes} must be a multiple of every N (got N={n})")
+        if ev.episodes % ev.n_test_envs:
+            raise ValueError(
+                f"eval.episodes={ev.episodes} must be a multiple of eval.n_test_envs={ev.n_test_envs}, so that every "
+                "test environment is visited equally"
+            )
+        for task in self.tasks:
+            if self.collect.demos_for(task) < max(self.n_train_envs):
+                raise ValueError(
+                    f"{task}: {self.collect.demos_for(task)} demos cannot cover N={max(self.n_train_envs)} environments"
+                )

@@ -1,0 +1,90 @@
+"""Executors run the steps they are handed and nothing else: a local process pool (default) or Ray.
+
+Both call :func:`~lerobot_factorworld.study.steps.run_step` with the same arguments and the steps fix
+their own thread counts, so a plan gives the same results on either. With Ray across several
+machines the study folder must be on a filesystem they share (steps read their inputs' outputs).
+"""
+
+from __future__ import annotations
+
+import concurrent.futures as cf
+from multiprocessing import get_context
+from typing import Any, Protocol
+
+from .steps import Step, run_step
+
+
+class Executor(Protocol):
+    def submit(self, step: Step) -> Any: ...
+
+    def wait_any(self, handles: list[Any]) -> list[Any]: ...
+
+    def result(self, handle: Any) -> dict[str, Any]: ...
+
+    def shutdown(self) -> None: ...
+
+
+class LocalExecutor:
+    """``workers`` fresh (spawned) processes on this machine; each step runs in one of them."""
+
+    def __init__(self, study_dir: str, workers: int) -> None:
+        self.study_dir = study_dir
+        self.pool = cf.ProcessPoolExecutor(workers, mp_context=get_context("spawn"))
+
+    def submit(self, step: Step) -> cf.Future:
+        return self.pool.submit(run_step, step.to_dict(), self.study_dir)
+
+    def wait_any(self, handles: list[cf.Future]) -> list[cf.Future]:
+        done, _ = cf.wait(handles, return_when=cf.FIRST_COMPLETED)
+        return list(done)
+
+    def result(self, handle: cf.Future) -> dict[str, Any]:
+        return handle.result()
+
+    def shutdown(self) -> None:
+        self.pool.shutdown(wait=True, cancel_futures=True)
+
+
+class RayExecutor:
+    """Ray tasks on the cluster at ``address`` (or a local Ray instance when ``None``), each asking for the
+    CPUs (threads) and GPU its step uses."""
+
+    def __init__(self, study_dir: str, workers: int, address: str | None = None) -> None:
+        try:
+            import ray
+        except ImportError:
+            raise ValueError("executor=ray needs the ray package: pip install 'ray>=2.40'") from None
+        self.ray = ray
+        self.study_dir = study_dir
+        self._started = not ray.is_initialized()
+        if self._started:
+            local = {"num_cpus": workers, "include_dashboard": False} if address is None else {}
+            ray.init(address=address, log_to_driver=False, runtime_env={"env_vars": {"MUJOCO_GL": "egl"}}, **local)
+        self._run = ray.remote(num_cpus=1, max_retries=0)(run_step)
+
+    def submit(self, step: Step):
+        return self._run.options(**step_resources(step)).remote(step.to_dict(), self.study_dir)
+
+    def wait_any(self, handles: list) -> list:
+        done, _ = self.ray.wait(handles, num_returns=1)
+        return done
+
+    def result(self, handle) -> dict[str, Any]:
+        return self.ray.get(handle)
+
+    def shutdown(self) -> None:
+        if self._started:
+            self.ray.shutdown()
+
+
+def step_resources(step: Step) -> dict[str, float]:
+    """Ray resources of a step: its threads (or collection workers) as CPUs, a GPU for CUDA training."""
+    cpus = step.inputs.get("threads") or step.meta.get("collect_workers") or 1
+    gpus = 1 if str(step.inputs.get("device", "")).startswith("cuda") else 0
+    return {"num_cpus": cpus, "num_gpus": gpus}
+
+
+def make_executor(kind: str, study_dir: str, workers: int, ray_address: str | None = None) -> Executor:
+    if kind == "ray":
+        return RayExecutor(study_dir, workers, ray_address)
+    return LocalExecutor(study_dir, workers)

@@ -1,0 +1,139 @@
+"""Run a study: plan the grid, run the steps that are not cached (dependencies first, ``workers`` at
+a time, on the chosen executor, with progress bars), then write ``results.csv``, plots and ``report.md``.
+
+A failed step is reported and its dependents are skipped; every other step still runs, so a rerun
+only redoes what failed. One run of a study folder at a time (a lock file guards it).
+"""
+
+from __future__ import annotations
+
+import fcntl
+import json
+import os
+import shlex
+import sys
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+
+from .config import StudyConfig
+from .executors import make_executor
+from .plan import Plan, describe, make_plan
+from .report import write_report
+from .steps import KINDS, Step, is_done
+
+LOCK_FILE = ".lock"
+PLAN_FILE = "plan.json"
+CONFIG_FILE = "config.json"
+
+
+@dataclass
+class StudyOutcome:
+    study_dir: Path
+    ran: dict[str, int] = field(default_factory=dict)  # steps run now, per kind
+    cached: dict[str, int] = field(default_factory=dict)
+    failed: dict[str, str] = field(default_factory=dict)  # step label -> error
+    skipped: int = 0  # steps not run because a step they depend on failed
+    results: Path | None = None
+    report: Path | None = None
+    plots: list[Path] = field(default_factory=list)
+
+
+def run_study(cfg: StudyConfig, command: str | None = None) -> StudyOutcome | str:
+    """Run (or resume) ``cfg``; with ``dry_run`` return the plan's description instead."""
+    plan = make_plan(cfg)
+    study_dir = Path(cfg.out_dir)
+    if cfg.dry_run:
+        return describe(cfg, plan)
+    study_dir.mkdir(parents=True, exist_ok=True)
+    command = command or "factorworld study " + " ".join(shlex.quote(a) for a in sys.argv[2:])
+    with _lock(study_dir):
+        _write(study_dir / CONFIG_FILE, asdict(cfg))
+        _write(study_dir / PLAN_FILE, [s.to_dict() for s in plan.steps])
+        outcome = _execute(cfg, plan, study_dir)
+        outcome.results, outcome.report, outcome.plots = write_report(cfg, plan, study_dir, command)
+    return outcome
+
+
+def _execute(cfg: StudyConfig, plan: Plan, study_dir: Path) -> StudyOutcome:
+    from tqdm import tqdm
+
+    outcome = StudyOutcome(study_dir)
+    todo = [s for s in plan.steps if not is_done(s, study_dir)]
+    for kind in KINDS:
+        total = len(plan.of_kind(kind))
+        outcome.cached[kind] = total - sum(1 for s in todo if s.kind == kind)
+        outcome.ran[kind] = 0
+    if not todo:
+        return outcome
+    bars = {
+        kind: tqdm(total=sum(1 for s in todo if s.kind == kind), desc=f"{kind:7s}", unit="step", position=i)
+        for i, kind in enumerate(k for k in KINDS if any(s.kind == k for s in todo))
+    }
+    done = {s.key for s in plan.steps if is_done(s, study_dir)}
+    failed: set[str] = set()
+    pending = list(todo)
+    running: dict = {}
+    executor = make_executor(cfg.executor, str(study_dir.resolve()), cfg.workers, cfg.ray_address)
+    try:
+        while pending or running:
+            for step in _blocked(pending, failed):
+                pending.remove(step)
+                failed.add(step.key)
+                outcome.skipped += 1
+                bars[step.kind].update(1)
+            ready = [s for s in pending if all(d in done for d in s.deps)]
+            ready.sort(key=lambda s: -KINDS.index(s.kind))  # finish cells before starting new ones: early results
+            for step in ready[: max(0, cfg.workers - len(running))]:
+                pending.remove(step)
+                running[executor.submit(step)] = step
+            if not running:
+                break
+            for handle in executor.wait_any(list(running)):
+                step = running.pop(handle)
+                try:
+                    executor.result(handle)
+                    done.add(step.key)
+                    outcome.ran[step.kind] += 1
+                except Exception as err:  # noqa: BLE001 - reported, dependents skipped, rerun resumes
+                    failed.add(step.key)
+                    outcome.failed[step.label] = f"{type(err).__name__}: {err}"
+                    (step.folder(study_dir)).mkdir(parents=True, exist_ok=True)
+                    (step.folder(study_dir) / "error.txt").write_text(outcome.failed[step.label])
+                bars[step.kind].update(1)
+    finally:
+        executor.shutdown()
+        for bar in bars.values():
+            bar.close()
+    return outcome
+
+
+def _blocked(pending: list[Step], failed: set[str]) -> list[Step]:
+    return [s for s in pending if any(d in failed for d in s.deps)]
+
+
+class _lock:
+    """An exclusive lock on the study folder (a second concurrent run would race on the same steps)."""
+
+    def __init__(self, study_dir: Path) -> None:
+        self.path = study_dir / LOCK_FILE
+
+    def __enter__(self):
+        self.file = open(self.path, "w")
+        try:
+            fcntl.flock(self.file, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            self.file.close()
+            raise FileExistsError(f"another run of this study is in progress ({self.path} is locked)") from None
+        self.file.write(str(os.getpid()))
+        self.file.flush()
+        return self
+
+    def __exit__(self, *exc) -> None:
+        fcntl.flock(self.file, fcntl.LOCK_UN)
+        self.file.close()
+
+
+def _write(path: Path, data) -> None:
+    tmp = path.with_suffix(path.suffix + ".tmp")
+    tmp.write_text(json.dumps(data, indent=1, sort_keys=True, default=str))
+    tmp.replace(path)

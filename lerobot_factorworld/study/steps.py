@@ -1,0 +1,334 @@
+"""Content-hashed study steps: collect (scripted demos), train (``lerobot-train``), eval (LeRobot's
+``eval_policy_all`` on the ``factorworld`` env, as ``lerobot-eval`` does).
+
+A step's key hashes its kind, its inputs and the keys of the steps it depends on, so a change to one
+setting changes the keys of exactly the steps that depend on it. Each step works in
+``<study>/steps/<kind>/<key>/`` and counts as done only once its ``result.json`` is written
+(atomically, last): an interrupted step is redone, a finished one is never redone.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import hashlib
+import json
+import math
+import os
+import shutil
+import subprocess
+import sys
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+KINDS = ("collect", "train", "eval")
+STEP_FORMAT = 1  # bump when a step's meaning changes: every key changes with it
+RESULT_FILE = "result.json"
+INPUTS_FILE = "step.json"
+LOG_FILE = "log.txt"
+DATA_DIR = "data"
+TRAIN_DIR = "train"
+CHECKPOINT = "checkpoints/last/pretrained_model"
+
+
+@dataclass(frozen=True)
+class Step:
+    """One unit of work. ``inputs`` (JSON-able) and ``deps`` decide ``key``; ``meta`` only labels it."""
+
+    kind: str
+    inputs: dict[str, Any]
+    deps: tuple[str, ...] = ()
+    meta: dict[str, Any] = field(default_factory=dict, compare=False)
+
+    @property
+    def key(self) -> str:
+        payload = {"format": STEP_FORMAT, "kind": self.kind, "inputs": self.inputs, "deps": list(self.deps)}
+        return hashlib.sha256(json.dumps(payload, sort_keys=True).encode()).hexdigest()[:16]
+
+    @property
+    def label(self) -> str:
+        return f"{self.kind} " + " ".join(f"{k}={v}" for k, v in self.meta.items())
+
+    def folder(self, study_dir: str | Path) -> Path:
+        return Path(study_dir) / "steps" / self.kind / self.key
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"kind": self.kind, "inputs": self.inputs, "deps": list(self.deps), "meta": self.meta, "key": self.key}
+
+    @classmethod
+    def from_dict(cls, data: dict[str, Any]) -> Step:
+        return cls(data["kind"], data["inputs"], tuple(data["deps"]), data.get("meta", {}))
+
+
+def is_done(step: Step, study_dir: str | Path) -> bool:
+    return (step.folder(study_dir) / RESULT_FILE).is_file()
+
+
+def read_result(step_or_folder: Step | Path, study_dir: str | Path | None = None) -> dict[str, Any]:
+    folder = step_or_folder.folder(study_dir) if isinstance(step_or_folder, Step) else step_or_folder
+    return json.loads((folder / RESULT_FILE).read_text())
+
+
+def run_step(step_data: dict[str, Any], study_dir: str) -> dict[str, Any]:
+    """Run one step (in a worker process or a Ray task) and return its result. Idempotent."""
+    os.environ.setdefault("MUJOCO_GL", "egl")
+    import lerobot_factorworld  # noqa: F401 - registers the env and policy types in this (fresh) process
+
+    step = Step.from_dict(step_data)
+    folder = step.folder(study_dir)
+    if (folder / RESULT_FILE).is_file():
+        return read_result(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    _atomic_write(folder / INPUTS_FILE, json.dumps(step.to_dict(), indent=1, sort_keys=True))
+    deps = [_dep_folder(study_dir, key) for key in step.deps]
+    start = time.perf_counter()
+    with _output_to(folder / LOG_FILE):  # progress bars of collection and evaluation go to the step's log
+        result = RUNNERS[step.kind](step, folder, deps)
+    result["seconds"] = round(time.perf_counter() - start, 2)
+    _atomic_write(folder / RESULT_FILE, json.dumps(result, indent=1, sort_keys=True))
+    return result
+
+
+@contextlib.contextmanager
+def _output_to(path: Path):
+    """Send this process's stdout and stderr (Python and C level) to ``path`` for the duration."""
+    sys.stdout.flush()
+    sys.stderr.flush()
+    saved = [os.dup(1), os.dup(2)]
+    with open(path, "a") as log:
+        os.dup2(log.fileno(), 1)
+        os.dup2(log.fileno(), 2)
+        try:
+            yield
+        finally:
+            sys.stdout.flush()
+            sys.stderr.flush()
+            os.dup2(saved[0], 1)
+            os.dup2(saved[1], 2)
+            for fd in saved:
+                os.close(fd)
+
+
+def _dep_folder(study_dir: str, key: str) -> Path:
+    for kind in KINDS:
+        folder = Path(study_dir) / "steps" / kind / key
+        if (folder / RESULT_FILE).is_file():
+            return folder
+    raise RuntimeError(f"step {key} that this step depends on has not finished")
+
+
+def _dep_of_kind(deps: list[Path], kind: str) -> Path:
+    return next(d for d in deps if d.parent.name == kind)
+
+
+# --- collect ------------------------------------------------------------------------------------
+
+
+def collect_config(inputs: dict[str, Any], root: Path, key: str, workers: int = 1):
+    from ..datasets.collect import CollectConfig
+    from ..factors.sampling import SamplingOptions
+
+    return CollectConfig(
+        task=inputs["task"],
+        factors=list(inputs["train_factors"]),
+        n_envs=inputs["n_envs"],
+        demos=inputs["demos"],
+        seed=inputs["seed"],
+        cameras=inputs["cameras"],
+        image_size=inputs["image_size"],
+        action_noise=inputs["action_noise"],
+        max_episode_steps=inputs["max_episode_steps"],
+        use_videos=inputs["use_videos"],
+        root=str(root),
+        repo_id=f"local/factorworld_{key}",
+        workers=workers,
+        mode="new",
+        sampling=SamplingOptions(widths=dict(inputs["widths"]), n_distractors=inputs["n_distractors"]),
+    )
+
+
+def _run_collect(step: Step, folder: Path, deps: list[Path]) -> dict[str, Any]:
+    from ..datasets.collect import SIDECAR, collect
+
+    root = folder / DATA_DIR
+    cfg = collect_config(step.inputs, root, step.key, step.meta.get("collect_workers", 1))
+    if (root / SIDECAR).is_file():  # merged before an interruption: nothing left to do
+        from lerobot.datasets.lerobot_dataset import LeRobotDatasetMetadata
+
+        meta = LeRobotDatasetMetadata(cfg.repo_id, root=root)
+        return {
+            "root": str(root),
+            "repo_id": cfg.repo_id,
+            "episodes": meta.total_episodes,
+            "frames": meta.total_frames,
+            "failures": {},
+        }
+    report = collect(cfg)
+    return {
+        "root": str(root),
+        "repo_id": cfg.repo_id,
+        "episodes": report.episodes,
+        "frames": report.frames,
+        "failures": report.failures,
+    }
+
+
+# --- train --------------------------------------------------------------------------------------
+
+
+def policy_args(policy: dict[str, Any], prefix: str = "--policy") -> list[str]:
+    """``{type: bc, augmentation: shift}`` -> ``["--policy.type=bc", "--policy.augmentation=shift"]``."""
+    args = []
+    for name, value in policy.items():
+        if isinstance(value, dict):
+            args += policy_args(value, f"{prefix}.{name}")
+        else:
+            text = json.dumps(value) if isinstance(value, (list, bool)) or value is None else str(value)
+            args.append(f"{prefix}.{name}={text}")
+    return args
+
+
+def train_steps(inputs: dict[str, Any], frames: int) -> int:
+    """Gradient steps: ``steps``, or ``ceil(epochs * frames / batch_size)`` when ``epochs`` is set."""
+    if inputs.get("epochs") is None:
+        return int(inputs["steps"])
+    return max(1, math.ceil(inputs["epochs"] * frames / inputs["batch_size"]))
+
+
+def _run_train(step: Step, folder: Path, deps: list[Path]) -> dict[str, Any]:
+    data = read_result(_dep_of_kind(deps, "collect"))
+    inputs = step.inputs
+    steps = train_steps(inputs, data["frames"])
+    out = folder / TRAIN_DIR
+    if out.exists():  # an interrupted run: LeRobot refuses an existing output_dir, start over
+        shutil.rmtree(out)
+    cmd = [
+        sys.executable,
+        "-m",
+        "lerobot.scripts.lerobot_train",
+        *policy_args(inputs["policy"]),
+        f"--policy.device={inputs['device']}",
+        "--policy.push_to_hub=false",
+        f"--dataset.repo_id={data['repo_id']}",
+        f"--dataset.root={data['root']}",
+        f"--steps={steps}",
+        f"--batch_size={inputs['batch_size']}",
+        f"--seed={inputs['seed']}",
+        "--num_workers=0",
+        f"--save_freq={steps}",
+        f"--log_freq={max(1, steps // 10)}",
+        "--wandb.enable=false",
+        f"--output_dir={out}",
+        *inputs["extra_args"],
+    ]
+    threads = str(inputs["threads"])
+    env = {**os.environ, "OMP_NUM_THREADS": threads, "MKL_NUM_THREADS": threads, "TOKENIZERS_PARALLELISM": "false"}
+    with open(folder / LOG_FILE, "a") as log:
+        log.write(" ".join(cmd) + "\n")
+        log.flush()
+        proc = subprocess.run(cmd, stdout=log, stderr=subprocess.STDOUT, env=env, cwd=folder)
+    if proc.returncode != 0:
+        tail = (folder / LOG_FILE).read_text()[-2000:]
+        raise RuntimeError(f"lerobot-train failed (exit {proc.returncode}); log {folder / LOG_FILE}:\n{tail}")
+    checkpoint = out / CHECKPOINT
+    if not checkpoint.is_dir():
+        raise RuntimeError(f"lerobot-train finished without a checkpoint at {checkpoint}")
+    return {"checkpoint": str(checkpoint), "steps": steps}
+
+
+# --- eval ---------------------------------------------------------------------------------------
+
+
+def eval_env_config(collect_inputs: dict[str, Any], data_root: str, inputs: dict[str, Any]):
+    """The ``factorworld`` env config of one condition: its ``train`` condition is the dataset's."""
+    from ..envs.configs import FactorWorldEnvConfig
+    from .conditions import TRAIN_SUITE
+
+    condition = inputs["condition"]
+    is_train = condition == TRAIN_SUITE
+    return FactorWorldEnvConfig(
+        task=collect_inputs["task"],
+        cameras=collect_inputs["cameras"],
+        image_size=collect_inputs["image_size"],
+        episode_length=inputs["max_episode_steps"],
+        dataset_root=data_root,
+        shifts=[] if is_train else [condition],
+        include_train=is_train,
+        n_test_envs=inputs["n_test_envs"],
+    )
+
+
+def _run_eval(step: Step, folder: Path, deps: list[Path]) -> dict[str, Any]:
+    import torch
+    from lerobot.configs.policies import PreTrainedConfig
+    from lerobot.envs.factory import make_env, make_env_pre_post_processors
+    from lerobot.policies.factory import make_policy, make_pre_post_processors
+    from lerobot.scripts.lerobot_eval import eval_policy_all
+    from lerobot.utils.import_utils import register_third_party_plugins
+    from lerobot.utils.random_utils import set_seed
+
+    from ..pick.records import episode_records
+    from .conditions import coverage, fingerprint
+
+    register_third_party_plugins()  # as lerobot-eval does: Factor World's env and policy types, and any other plugin
+
+    inputs = step.inputs
+    torch.set_num_threads(inputs["threads"])
+    collect_folder = _dep_of_kind(deps, "collect")
+    collect_inputs = json.loads((collect_folder / INPUTS_FILE).read_text())["inputs"]
+    data = read_result(collect_folder)
+    checkpoint = read_result(_dep_of_kind(deps, "train"))["checkpoint"]
+    env_cfg = eval_env_config(collect_inputs, data["root"], inputs)
+    task = env_cfg.task_names[0]
+    configs = env_cfg.suites(task)[inputs["condition"]]
+
+    policy_cfg = PreTrainedConfig.from_pretrained(checkpoint)
+    policy_cfg.pretrained_path = Path(checkpoint)
+    policy_cfg.device = "cpu" if not torch.cuda.is_available() else policy_cfg.device
+    set_seed(inputs["start_seed"])
+    policy = make_policy(cfg=policy_cfg, env_cfg=env_cfg)
+    preprocessor, postprocessor = make_pre_post_processors(
+        policy_cfg=policy_cfg,
+        pretrained_path=checkpoint,
+        preprocessor_overrides={"device_processor": {"device": str(policy_cfg.device)}},
+    )
+    env_pre, env_post = make_env_pre_post_processors(env_cfg=env_cfg, policy_cfg=policy_cfg)
+    envs = make_env(env_cfg, n_envs=inputs["batch_size"], use_async_envs=False)
+    with torch.no_grad():
+        info = eval_policy_all(
+            envs,
+            policy,
+            env_pre,
+            env_post,
+            preprocessor,
+            postprocessor,
+            n_episodes=inputs["episodes"],
+            max_episodes_rendered=0,
+            start_seed=inputs["start_seed"],
+        )
+    successes = [bool(s) for s in info["per_task"][0]["metrics"]["successes"]]
+    seeds = [inputs["start_seed"] + i for i in range(len(successes))]
+    cover = coverage(seeds, len(configs))
+    return {
+        "condition": inputs["condition"],
+        "successes": successes,
+        "seeds": seeds,
+        "n_envs": len(configs),
+        "envs_visited": cover.visited,
+        "equal_visits": cover.equal,
+        "fingerprint": fingerprint(configs, env_cfg.sampling.widths.get("object_pos")),
+        "checkpoint": checkpoint,
+        # pick family: what every episode asked for (instruction, named object), for per-object breakdowns
+        "pick": episode_records(configs, seeds, env_cfg.sampling.widths.get("object_pos")),
+    }
+
+
+RUNNERS = {"collect": _run_collect, "train": _run_train, "eval": _run_eval}
+
+
+def _atomic_write(path: Path, text: str) -> None:
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_suffix(path.suffix + f".tmp{os.getpid()}")
+    tmp.write_text(text)
+    tmp.replace(path)

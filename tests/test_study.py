@@ -1,0 +1,336 @@
+"""The generalization-gap study: metrics against hand-computed numbers, the evaluation protocol
+(condition-independent test environments, equal and paired visits, the training condition read from a
+dataset), and a toy study end to end (collect, train, evaluate, report), cached, resumed, and on Ray."""
+
+import filecmp
+import logging
+import math
+import subprocess
+import sys
+from dataclasses import replace
+from pathlib import Path
+
+import pytest
+
+from lerobot_factorworld.study import metrics
+from lerobot_factorworld.study.conditions import coverage, evaluation_suites
+
+ROOT = Path(__file__).resolve().parents[1]
+FACTORWORLD = Path(sys.executable).with_name("factorworld")
+
+# --- metrics ------------------------------------------------------------------------------------
+
+
+def test_wilson_interval_matches_hand_computation():
+    # 8/10, z = 1.96: centre (0.8 + 0.19207) / 1.38415 = 0.71674, half 1.96 * 0.16 / 1.38415 = 0.22657
+    low, high = metrics.wilson_interval(8, 10)
+    assert low == pytest.approx(0.49016, abs=1e-5) and high == pytest.approx(0.94332, abs=1e-5)
+    assert metrics.wilson_interval(0, 10) == pytest.approx((0.0, 0.27753), abs=1e-5)
+    assert metrics.wilson_interval(10, 10) == pytest.approx((0.72247, 1.0), abs=1e-5)
+    assert all(math.isnan(v) for v in metrics.wilson_interval(0, 0))
+    with pytest.raises(ValueError):
+        metrics.wilson_interval(11, 10)
+
+
+def test_paired_gap_is_newcombes_interval():
+    # 4 paired episodes: both succeed 2, only train 1, only shifted 0, neither 1.
+    # P_T = 0.75 (Wilson 0.30064..0.95441), P_F = 0.5 (Wilson 0.15004..0.84996); ad - bc = 2 <= n/2 -> phi = 0;
+    # lower = 0.25 - sqrt(0.44936^2 + 0.34996^2) = -0.31956; upper = 0.25 + sqrt(0.20441^2 + 0.34996^2) = 0.65529
+    train = [True, True, True, False]
+    shifted = [True, True, False, False]
+    gap, low, high = metrics.paired_gap(train, shifted)
+    assert gap == pytest.approx(0.25)
+    assert low == pytest.approx(-0.31956, abs=1e-4) and high == pytest.approx(0.65529, abs=1e-4)
+    # Newcombe (1998) worked example: 36 both, 12 only first, 2 only second, 0 neither -> 0.0569 .. 0.3404
+    gap, low, high = metrics.paired_gap([True] * 48 + [False] * 2, [True] * 36 + [False] * 12 + [True] * 2)
+    assert (gap, low, high) == pytest.approx((0.2, 0.0569, 0.3404), abs=1e-4)
+    assert metrics.paired_gap([True] * 5, [True] * 5)[0] == 0.0
+    with pytest.raises(ValueError, match="equal lengths"):
+        metrics.paired_gap([True], [True, False])
+
+
+def test_pair_metric_interaction_mean_se_and_spearman():
+    assert metrics.pair_metric(0.4, 0.5, 0.8) == pytest.approx(-0.2)  # (0.4 - 0.5) / 0.5
+    assert metrics.pair_metric(0.63, 0.6, 0.9) == pytest.approx(0.05)
+    assert math.isnan(metrics.pair_metric(0.1, 0.0, 0.5))  # the harder factor never succeeds
+    assert metrics.interaction(0.5, 0.2, 0.25) == pytest.approx(0.05)
+    mean, se = metrics.mean_se([0.2, 0.4, 0.6])
+    assert mean == pytest.approx(0.4) and se == pytest.approx(0.2 / math.sqrt(3))
+    assert math.isnan(metrics.mean_se([0.3])[1])
+    assert metrics.rank_hardest_first({"a": 0.3, "b": 0.1, "c": 0.3}) == {"a": 1.5, "c": 1.5, "b": 3.0}
+    # 1 - 6 * (0 + 1 + 1) / (3 * 8) = 0.5
+    assert metrics.spearman({"a": 1, "b": 2, "c": 3}, {"a": 1, "b": 3, "c": 2}) == pytest.approx(0.5)
+    paper_order = sorted(metrics.PAPER_FACTOR_RANKS, key=metrics.PAPER_FACTOR_RANKS.get)
+    reverse = {f: float(len(paper_order) - i) for i, f in enumerate(paper_order)}
+    assert metrics.spearman(reverse, metrics.PAPER_FACTOR_RANKS) < -0.9
+    assert math.isnan(metrics.spearman({"a": 1, "b": 2}, {"a": 1, "b": 2}))
+
+
+# --- protocol -----------------------------------------------------------------------------------
+
+
+def test_test_environments_do_not_depend_on_the_other_conditions():
+    alone = evaluation_suites("pick-place", 2, ["light", "table_texture"], ["light"], 4, seed=3)
+    crowded = evaluation_suites(
+        "pick-place",
+        2,
+        ["light", "table_texture"],
+        ["table_texture", "camera_pos", "light+table_texture", "light"],
+        4,
+        seed=3,
+    )
+    assert crowded["light"] == alone["light"]
+    assert crowded["train"] == alone["train"]
+    # a pair reuses the values its single factors got, on the same training environments
+    pair, light, texture = crowded["light+table_texture"], crowded["light"], crowded["table_texture"]
+    assert [c.factors.light for c in pair] == [c.factors.light for c in light]
+    assert [c.factors.table_texture for c in pair] == [c.factors.table_texture for c in texture]
+    # a different seed gives different test environments
+    assert evaluation_suites("pick-place", 2, ["light"], ["light"], 4, seed=4)["light"] != alone["light"]
+
+
+def _run_episodes(env_cfg, batch_size: int, episodes: int, start_seed: int = 1000) -> dict[str, list]:
+    """Reset the vector envs the way LeRobot's eval_policy does; (env_index, object start) per episode."""
+    envs = env_cfg.create_envs(n_envs=batch_size)
+    out = {}
+    try:
+        for suite, by_task in envs.items():
+            vec, seen = by_task[0], []
+            for batch in range(math.ceil(episodes / batch_size)):
+                seeds = list(range(start_seed + batch * batch_size, start_seed + (batch + 1) * batch_size))
+                _, info = vec.reset(seed=seeds)
+                starts = info["factors"]["object_pos"]
+                seen += [(int(i), tuple(map(float, starts[k]))) for k, i in enumerate(info["env_index"])]
+            out[suite] = seen[:episodes]
+    finally:
+        for by_task in envs.values():
+            by_task[0].close()
+    return out
+
+
+def test_episodes_visit_every_environment_equally_and_pair_object_starts(caplog):
+    from lerobot_factorworld.envs.configs import FactorWorldEnvConfig
+
+    cfg = FactorWorldEnvConfig(
+        task="handle-press", n_train_envs=2, train_factors=["light"], shifts=["light"], n_test_envs=4, image_size=16
+    )
+    one = _run_episodes(cfg, batch_size=1, episodes=8)
+    assert _run_episodes(cfg, batch_size=2, episodes=8) == one  # depends on the episode's index and seed only
+    for suite, n_envs in (("train", 2), ("light", 4)):
+        visits = [index for index, _ in one[suite]]
+        assert sorted(visits) == sorted(list(range(n_envs)) * (8 // n_envs))
+    assert [s for _, s in one["train"]] == [s for _, s in one["light"]]  # paired object starts
+    assert coverage(range(1000, 1008), 4).equal
+    partial = coverage(range(1000, 1003), 4)
+    assert not partial.equal and partial.visited == 3 and "3 of its 4 environments" in partial.describe("light")
+    with caplog.at_level(logging.WARNING, logger="lerobot_factorworld.study.conditions"):
+        _run_episodes(replace(cfg, include_train=False), batch_size=1, episodes=3)
+    assert "visit 3 of its 4 environments" in caplog.text
+
+
+# --- the toy study ------------------------------------------------------------------------------
+
+TOY = """
+name: toy
+out_dir: {out}
+tasks: [handle-press]
+n_train_envs: [1, 2]
+seeds: [0]
+train_factors: [light, table_texture, camera_pos]
+factors: [light, table_texture]
+pairs: [all]
+methods:
+  - name: bc
+    policy: {{type: bc}}
+collect:
+  demos: 2
+  max_episode_steps: 60
+  image_size: 48
+train:
+  steps: 3
+  batch_size: 4
+eval:
+  n_test_envs: 2
+  episodes: 2
+  max_episode_steps: 8
+executor: {executor}
+workers: 2
+"""
+
+
+def _toy_config(out: Path, executor: str = "local"):
+    from lerobot_factorworld.cli_errors import parse_config
+    from lerobot_factorworld.study.config import StudyConfig
+
+    path = out.parent / f"{out.name}.yaml"
+    path.write_text(TOY.format(out=out, executor=executor))
+    return parse_config(StudyConfig, [f"--config_path={path}"], "study"), path
+
+
+@pytest.fixture(scope="module")
+def toy(tmp_path_factory):
+    from lerobot_factorworld.study.runner import run_study
+
+    out = tmp_path_factory.mktemp("study") / "toy"
+    cfg, path = _toy_config(out)
+    outcome = run_study(cfg, command=f"factorworld study --config {path}")
+    return cfg, outcome
+
+
+@pytest.mark.slow
+def test_toy_study_end_to_end(toy):
+    import csv
+
+    from lerobot_factorworld.study.report import RESULT_COLUMNS
+
+    cfg, outcome = toy
+    assert not outcome.failed, outcome.failed
+    assert outcome.ran == {"collect": 2, "train": 2, "eval": 8}
+    rows = list(csv.DictReader(open(outcome.results)))
+    assert tuple(rows[0]) == RESULT_COLUMNS
+    assert {(r["n_train_envs"], r["condition"]) for r in rows} == {
+        (n, c) for n in ("1", "2") for c in ("train", "light", "table_texture", "light+table_texture")
+    }
+    for row in rows:
+        assert int(row["episodes"]) == 2 and row["envs_visited"] == row["n_envs"]
+        assert float(row["ci_low"]) <= float(row["success_rate"]) <= float(row["ci_high"])
+        assert float(row["gap"]) == pytest.approx(float(row["train_success_rate"]) - float(row["success_rate"]))
+        assert len(row["fingerprint"]) == 16
+    report = outcome.report.read_text()
+    assert "## Factor ordering" in report and "Spearman" in report
+    assert {p.name for p in outcome.plots} >= {"gap_vs_n.png", "pairs.png", "methods.png", "success_rates.png"}
+    for plot in outcome.plots:
+        assert plot.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and plot.stat().st_size > 5000
+        assert f"]({plot.name})" in report
+
+
+@pytest.mark.slow
+def test_rerun_does_no_new_work_and_interrupted_study_resumes(toy):
+    from lerobot_factorworld.study.plan import make_plan
+    from lerobot_factorworld.study.runner import run_study
+
+    cfg, first = toy
+    before = first.results.read_text()
+    again = run_study(cfg, command="rerun")
+    assert again.ran == {"collect": 0, "train": 0, "eval": 0}
+    assert again.cached == {"collect": 2, "train": 2, "eval": 8}
+    assert again.results.read_text() == before
+    # interrupt: two evaluations lost their results (one mid-write), results.csv gone
+    evals = make_plan(cfg).of_kind("eval")
+    for step in evals[:2]:
+        (step.folder(cfg.out_dir) / "result.json").unlink()
+    (evals[1].folder(cfg.out_dir) / "result.json.tmp123").write_text("{half")
+    first.results.unlink()
+    resumed = run_study(cfg, command="resume")
+    assert resumed.ran == {"collect": 0, "train": 0, "eval": 2}
+    assert resumed.results.read_text() == before  # same rows, none duplicated
+
+
+def test_changing_one_setting_changes_only_the_steps_that_depend_on_it(tmp_path):
+    from lerobot_factorworld.study.plan import make_plan
+
+    cfg, _ = _toy_config(tmp_path / "toy")
+    keys = {kind: {s.key for s in make_plan(cfg).of_kind(kind)} for kind in ("collect", "train", "eval")}
+    more_episodes = replace(cfg, eval=replace(cfg.eval, episodes=4))
+    changed = {kind: {s.key for s in make_plan(more_episodes).of_kind(kind)} for kind in keys}
+    assert changed["collect"] == keys["collect"] and changed["train"] == keys["train"]
+    assert not changed["eval"] & keys["eval"]
+    longer = replace(cfg, train=replace(cfg.train, steps=4))
+    changed = {kind: {s.key for s in make_plan(longer).of_kind(kind)} for kind in keys}
+    assert changed["collect"] == keys["collect"] and not changed["train"] & keys["train"]
+
+
+@pytest.mark.slow
+def test_dataset_gives_the_training_condition_and_mismatches_are_refused(toy):
+    from lerobot_factorworld.envs.configs import FactorWorldEnvConfig
+    from lerobot_factorworld.factors.sampling import sample_configs
+    from lerobot_factorworld.study.plan import make_plan
+    from lerobot_factorworld.study.steps import read_result
+
+    cfg, _ = toy
+    collect = next(s for s in make_plan(cfg).of_kind("collect") if s.inputs["n_envs"] == 2)
+    root = read_result(collect, cfg.out_dir)["root"]
+    env_cfg = FactorWorldEnvConfig(task="handle-press", dataset_root=root, shifts=["light"], n_test_envs=2)
+    assert (env_cfg.n_train_envs, env_cfg.seed) == (2, 0)
+    assert env_cfg.train_factors == ["light", "table_texture", "camera_pos"]
+    train = env_cfg.suites("handle-press")["train"]
+    factors = ["light", "table_texture", "camera_pos"]
+    assert train == sample_configs("handle-press", 2, 0, "train", factors, env_cfg.sampling)
+    assert env_cfg.gym_kwargs["object_pos_width"] == "narrow"
+    FactorWorldEnvConfig(task="handle-press", dataset_root=root, n_train_envs=2, seed=0)  # agreeing: fine
+    for wrong in ({"n_train_envs": 5}, {"seed": 1}, {"train_factors": ["light"]}):
+        with pytest.raises(ValueError, match="disagrees with dataset"):
+            FactorWorldEnvConfig(task="handle-press", dataset_root=root, **wrong)
+    with pytest.raises(ValueError, match="no environment of task 'door-open'"):
+        FactorWorldEnvConfig(task="door-open", dataset_root=root)
+    with pytest.raises(FileNotFoundError, match="not a Factor World dataset"):
+        FactorWorldEnvConfig(task="handle-press", dataset_root=str(ROOT))
+
+
+@pytest.mark.slow
+def test_the_same_plan_on_a_local_ray_instance_gives_the_same_results(toy, tmp_path):
+    pytest.importorskip("ray")
+    from lerobot_factorworld.study.plan import make_plan
+    from lerobot_factorworld.study.runner import run_study
+    from lerobot_factorworld.study.steps import read_result
+
+    cfg, local = toy
+    ray_cfg, _ = _toy_config(tmp_path / "toy", executor="ray")
+    outcome = run_study(ray_cfg, command="ray")
+    assert not outcome.failed, outcome.failed
+    assert outcome.ran == local.ran
+    assert filecmp.cmp(outcome.results, local.results, shallow=False)
+    for step in make_plan(cfg).of_kind("train"):  # the same weights, not only the same (toy) outcomes
+        weights = Path(read_result(step, cfg.out_dir)["checkpoint"]) / "model.safetensors"
+        on_ray = Path(read_result(step, ray_cfg.out_dir)["checkpoint"]) / "model.safetensors"
+        assert filecmp.cmp(weights, on_ray, shallow=False)
+
+
+# --- command line -------------------------------------------------------------------------------
+
+
+def _factorworld(*args: str) -> subprocess.CompletedProcess:
+    return subprocess.run([str(FACTORWORLD), *args], capture_output=True, text=True, timeout=300)
+
+
+def test_cli_dry_run_and_one_line_errors(tmp_path):
+    _, path = _toy_config(tmp_path / "toy")
+    result = _factorworld("study", "--config", str(path), "--dry-run")
+    assert result.returncode == 0, result.stderr
+    assert "collect       2 steps,      0 cached" in result.stdout and "eval          8 steps" in result.stdout
+    assert "one CPU machine" in result.stdout and "Ray cluster" in result.stdout
+    assert not (tmp_path / "toy").exists()  # a dry run does nothing
+    bad = path.read_text().replace("episodes: 2", "episodes: 3")
+    (tmp_path / "bad.yaml").write_text(bad)
+    result = _factorworld("study", f"--config={tmp_path / 'bad.yaml'}")
+    assert result.returncode == 2 and result.stderr.startswith("error: ") and len(result.stderr.splitlines()) == 1
+    assert "multiple" in result.stderr
+    result = _factorworld("study", f"--config={path}", "--factors=[lights]")
+    assert result.returncode == 2 and "valid factors" in result.stderr
+
+
+@pytest.mark.parametrize("name", ["quick.yaml", "paper.yaml", "two_tasks.yaml"])
+def test_study_configs_parse_and_plan(name):
+    from lerobot_factorworld.cli_errors import parse_config
+    from lerobot_factorworld.study.config import StudyConfig
+    from lerobot_factorworld.study.plan import make_plan
+
+    cfg = parse_config(StudyConfig, [f"--config_path={ROOT / 'configs' / 'study' / name}"], "study")
+    assert make_plan(cfg).counts()["eval"] > 0
+
+
+def test_paper_config_is_the_papers_grid():
+    from lerobot_factorworld.cli_errors import parse_config
+    from lerobot_factorworld.factors.registry import PAPER_STUDY_FACTORS
+    from lerobot_factorworld.study.config import StudyConfig
+    from lerobot_factorworld.study.plan import make_plan, radius_of
+
+    cfg = parse_config(StudyConfig, [f"--config_path={ROOT / 'configs' / 'study' / 'paper.yaml'}"], "study")
+    assert cfg.tasks == ["pick-place", "bin-picking", "door-open"] and cfg.n_train_envs == [5, 20, 50, 100]
+    assert len(cfg.seeds) == 5 and cfg.train.epochs == 100 and cfg.eval.n_test_envs == 100
+    assert cfg.collect.demos_for("pick-place") == 2000 and cfg.collect.demos_for("door-open") == 1000
+    assert set(cfg.factors) == set(PAPER_STUDY_FACTORS) and len(cfg.pair_conditions()) == 21
+    assert cfg.radius_factors == ["camera_pos", "table_pos"]
+    widths = {s.meta["widths"] for s in make_plan(cfg).of_kind("collect")}
+    assert widths == {"default", "camera_pos=medium", "camera_pos=wide", "table_pos=medium", "table_pos=wide"}
+    assert radius_of("camera_pos=wide", "camera_pos") == 0.075 and radius_of("default", "table_pos") == 0.025
