@@ -1,4 +1,4 @@
-"""Everything LeRobot looks up by name: the ``factorworld`` env type, the ``rt1`` policy and its processor step.
+"""Everything LeRobot looks up by name: the ``factorworld`` env type, the ``rt1`` and ``bc`` policies, processor steps.
 
 Imported by LeRobot's plugin discovery (distribution ``lerobot_env_factorworld``) or by
 ``--env.discover_packages_path=lerobot_factorworld``. Kept out of the package ``__init__`` because
@@ -6,7 +6,8 @@ importing LeRobot costs seconds.
 """
 
 from .envs.configs import FactorWorldEnvConfig
+from .policies.bc.configuration_bc import BCConfig
 from .policies.rt1 import processor_rt1  # noqa: F401  (registers the rt1_language_embedding step)
 from .policies.rt1.configuration_rt1 import RT1Config
 
-__all__ = ["FactorWorldEnvConfig", "RT1Config"]
+__all__ = ["BCConfig", "FactorWorldEnvConfig", "RT1Config"]

@@ -37,16 +37,15 @@ from __future__ import annotations
 
 import os
 
-os.environ.setdefault("MUJOCO_GL", "egl")  # before anything imports mujoco (Meta-World's side included)
+import _bench
+
+_bench.setup_headless_gl()  # before anything imports mujoco (Meta-World's side included); children inherit it
+_bench.add_repo_to_path()
 os.environ.setdefault("SVT_LOG", "1")  # SVT-AV1 otherwise prints its whole configuration per video
-if os.environ["MUJOCO_GL"] == "egl":
-    os.environ.setdefault("PYOPENGL_PLATFORM", "egl")  # as lerobot_factorworld does; inherited by the workers
 
 import argparse  # noqa: E402
-import json  # noqa: E402
 import shutil  # noqa: E402
 import statistics  # noqa: E402
-import subprocess  # noqa: E402
 import sys  # noqa: E402
 import tempfile  # noqa: E402
 import time  # noqa: E402
@@ -56,7 +55,6 @@ from pathlib import Path  # noqa: E402
 import numpy as np  # noqa: E402
 
 SCRIPT = Path(__file__).resolve()
-sys.path.insert(0, str(SCRIPT.parents[1]))
 
 TARGET_RATIO = 10.0
 IMAGE_SIZE = 84
@@ -190,7 +188,7 @@ def worker_main(args: argparse.Namespace) -> int:
         result = run_metaworld(args.task, args.demos, root, args.seed)
     else:
         result = run_factorworld(args.task, args.demos, 1 if args.worker == FW_ONE else 0, root, args.seed)
-    Path(args.result).write_text(json.dumps(result))
+    _bench.write_result(args.result, result)
     return 0
 
 
@@ -214,10 +212,7 @@ def run_mode(mode: str, args: argparse.Namespace, out_dir: Path, round_index: in
         "--seed",
         str(args.seed),
     ]
-    proc = subprocess.run(command, stdout=sys.stderr, cwd=SCRIPT.parents[1], check=False)
-    if proc.returncode != 0 or not result_path.is_file():
-        raise RuntimeError(f"{MODE_LABELS[mode]} failed (exit code {proc.returncode}); see its output above")
-    result = json.loads(result_path.read_text())
+    result = _bench.run_child(command, result_path, MODE_LABELS[mode])
     if not args.keep:
         shutil.rmtree(root, ignore_errors=True)
     if result["frames"] <= 0 or result["seconds"] <= 0:
@@ -270,7 +265,7 @@ def main(argv: list[str] | None = None) -> int:
     try:
         with tqdm(total=args.rounds * len(MODES), desc="modes", unit="mode", file=sys.stderr) as bar:
             for r in range(args.rounds):
-                for mode in MODES if r % 2 == 0 else MODES[::-1]:
+                for mode in _bench.round_order(MODES, r):
                     bar.set_postfix_str(f"round {r + 1}/{args.rounds} {mode}")
                     results[mode].append(run_mode(mode, args, out_dir, r))
                     bar.update(1)
@@ -300,7 +295,7 @@ def main(argv: list[str] | None = None) -> int:
     print(f"Factor World 1 worker / Meta-World naive: {fps[FW_ONE] / fps[META_WORLD]:.2f}x")
     verdict = "meets" if ratio >= TARGET_RATIO else "BELOW"
     print(f"Factor World all workers / Meta-World naive: {ratio:.2f}x ({verdict} the >= {TARGET_RATIO:g}x target)")
-    print(f"ratio: {ratio:.4f}")
+    print(_bench.ratio_line(ratio))
     return 0
 
 

@@ -35,28 +35,24 @@ The last line printed is exactly ``ratio: <float>`` = Factor World median steps/
 
 from __future__ import annotations
 
-import os
+import _bench
 
-os.environ.setdefault("MUJOCO_GL", "egl")  # before anything imports mujoco (Meta-World's side included)
-if os.environ["MUJOCO_GL"] == "egl":
-    os.environ.setdefault("PYOPENGL_PLATFORM", "egl")  # as lerobot_factorworld does; inherited by the workers
+_bench.setup_headless_gl()  # before anything imports mujoco (Meta-World's side included); workers inherit it
+_bench.add_repo_to_path()
 
 import argparse  # noqa: E402
 import multiprocessing as mp  # noqa: E402
+import os  # noqa: E402
 import statistics  # noqa: E402
 import sys  # noqa: E402
 import time  # noqa: E402
-import traceback  # noqa: E402
 import warnings  # noqa: E402
 from collections.abc import Callable  # noqa: E402
 from dataclasses import dataclass  # noqa: E402
-from pathlib import Path  # noqa: E402
 from typing import Any  # noqa: E402
 
 import numpy as np  # noqa: E402
 from tqdm import tqdm  # noqa: E402
-
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 TARGET_RATIO = 8.0
 IMAGE_SIZE = 84
@@ -167,10 +163,11 @@ def render_settings(runner: Runner) -> str:
 def _worker(conn, mode: str, tasks: list[str], seed: int, actions: dict[str, np.ndarray]) -> None:
     """One mode in its own process: build and warm up its envs, then run timed segments on request.
 
-    Protocol (worker -> parent): ("ready", settings), then per ("run", lo, hi) request any number of
-    ("progress", n) and one ("done", seconds); ("closed",) after ("close",); ("error", text) on failure.
+    Requests are ``("run", lo, hi)``: time ``actions[task][lo:hi]`` on every task's env; the reply is the
+    summed seconds (progress is reported every ``PROGRESS_EVERY`` steps). See ``_bench.serve``.
     """
-    try:
+
+    def start() -> tuple[list[Runner], str]:
         warnings.filterwarnings("ignore", module=r"gymnasium\..*")  # env-checker chatter about Meta-World's spaces
         maker = make_factorworld if mode == FACTOR_WORLD else make_metaworld
         runners = [maker(task, seed) for task in tasks]
@@ -179,75 +176,31 @@ def _worker(conn, mode: str, tasks: list[str], seed: int, actions: dict[str, np.
         for runner in runners:
             runner.reset()
             runner.run(actions[runner.task][:WARMUP_STEPS])
-        conn.send(("ready", [render_settings(runner) for runner in runners][0]))
+        return runners, [render_settings(runner) for runner in runners][0]
 
+    def handle(runners: list[Runner], msg: tuple, progress: Callable[[int], None]) -> float:
+        _, lo, hi = msg
         pending = 0
 
         def on_step() -> None:
             nonlocal pending
             pending += 1
             if pending >= PROGRESS_EVERY:
-                conn.send(("progress", pending))
+                progress(pending)
                 pending = 0
 
-        while True:
-            msg = conn.recv()
-            if msg[0] == "run":
-                _, lo, hi = msg
-                seconds = sum(runner.run(actions[runner.task][lo:hi], on_step=on_step) for runner in runners)
-                for runner in runners:
-                    render_settings(runner)  # raises if the last frame came out blank
-                if pending:
-                    conn.send(("progress", pending))
-                    pending = 0
-                conn.send(("done", seconds))
-            elif msg[0] == "close":
-                for runner in runners:
-                    runner.env.close()
-                conn.send(("closed",))
-                return
-    except BaseException:
-        conn.send(("error", traceback.format_exc()))
+        seconds = sum(runner.run(actions[runner.task][lo:hi], on_step=on_step) for runner in runners)
+        for runner in runners:
+            render_settings(runner)  # raises if the last frame came out blank
+        if pending:
+            progress(pending)
+        return seconds
 
+    def stop(runners: list[Runner]) -> None:
+        for runner in runners:
+            runner.env.close()
 
-class Worker:
-    """Parent-side handle on a :func:`_worker` process."""
-
-    def __init__(self, ctx, mode: str, tasks: list[str], seed: int, actions: dict[str, np.ndarray]) -> None:
-        self.mode = mode
-        self.conn, child = ctx.Pipe()
-        self.process = ctx.Process(target=_worker, args=(child, mode, tasks, seed, actions), daemon=True)
-        self.process.start()
-        child.close()
-
-    def recv(self) -> tuple:
-        msg = self.conn.recv()
-        if msg[0] == "error":
-            raise RuntimeError(f"{self.mode} worker failed:\n{msg[1]}")
-        return msg
-
-    def run(self, lo: int, hi: int, bar: tqdm) -> float:
-        self.conn.send(("run", lo, hi))
-        while True:
-            msg = self.recv()
-            if msg[0] == "progress":
-                bar.update(msg[1])
-            elif msg[0] == "done":
-                return msg[1]
-
-    def close(self) -> None:
-        try:
-            if self.process.is_alive():
-                self.conn.send(("close",))
-                self.conn.recv()
-        except (EOFError, OSError):
-            pass  # the worker already failed or exited; its error (if any) was raised by recv()
-        finally:
-            self.process.join(timeout=30)
-            if self.process.is_alive():
-                self.process.terminate()
-                self.process.join(timeout=5)
-            self.conn.close()
+    _bench.serve(conn, start, handle, stop)
 
 
 def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
@@ -286,18 +239,18 @@ def main(argv: list[str] | None = None) -> int:
         flush=True,
     )
     ctx = mp.get_context("spawn")  # fresh interpreters: no GL state inherited through fork
-    workers = {mode: Worker(ctx, mode, tasks, args.seed, actions) for mode in MODES}
+    workers = {mode: _bench.PipeWorker(ctx, mode, _worker, (mode, tasks, args.seed, actions)) for mode in MODES}
     try:
-        settings = {mode: workers[mode].recv()[1] for mode in MODES}
+        settings = {mode: workers[mode].ready() for mode in MODES}
 
         rates: dict[str, list[float]] = {mode: [] for mode in MODES}
         total = args.rounds * len(MODES) * len(tasks) * args.steps
         with tqdm(total=total, desc="rendered steps", unit="step", file=sys.stderr) as bar:
             for r in range(args.rounds):
                 lo = WARMUP_STEPS + r * args.steps
-                for mode in MODES if r % 2 == 0 else MODES[::-1]:
+                for mode in _bench.round_order(MODES, r):
                     bar.set_postfix_str(f"round {r + 1}/{args.rounds} {mode}")
-                    seconds = workers[mode].run(lo, lo + args.steps, bar)
+                    seconds = workers[mode].request(("run", lo, lo + args.steps), bar.update)
                     rates[mode].append(len(tasks) * args.steps / seconds)
     finally:
         for worker in workers.values():
@@ -321,7 +274,7 @@ def main(argv: list[str] | None = None) -> int:
     print("-" * len(header))
     verdict = "meets" if ratio >= TARGET_RATIO else "BELOW"
     print(f"Factor World / Meta-World: {ratio:.2f}x ({verdict} the >= {TARGET_RATIO:g}x target)")
-    print(f"ratio: {ratio:.4f}")
+    print(_bench.ratio_line(ratio))
     return 0
 
 

@@ -47,12 +47,12 @@ import statistics
 import sys
 import time
 from dataclasses import dataclass, field
-from pathlib import Path
 
+import _bench
 import torch
 from tqdm import tqdm
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+_bench.add_repo_to_path()
 
 from lerobot.configs import FeatureType, PolicyFeature  # noqa: E402
 
@@ -206,7 +206,7 @@ def bench_preset(preset: str, args: argparse.Namespace, bar: tqdm) -> Result:
         bar.set_postfix_str(f"{tag} train")
         seconds = time_training(policy, optimizer, batch, train_steps, device, bar)
         result.train_rates.append(batch_size * train_steps / seconds)
-        for reuse in (True, False) if r % 2 == 0 else (False, True):
+        for reuse in _bench.round_order((True, False), r):
             bar.set_postfix_str(f"{tag} reuse {'ON' if reuse else 'OFF'}")
             result.latency_ms[reuse] += time_inference(
                 policy, frames, language, reuse, args.warmup, infer_steps, device, bar
@@ -295,14 +295,10 @@ def main(argv: list[str] | None = None) -> int:
             f"select_action {len(res.latency_ms[True])} timed calls per mode ({infer_steps} per round, "
             f"{args.warmup} warm-up after each reset)"
         )
-    load_end = os.getloadavg()
-    print(
-        f"load average (1/5/15 min) at start {'/'.join(f'{x:.2f}' for x in load_start)}, at end "
-        f"{'/'.join(f'{x:.2f}' for x in load_end)} on {os.cpu_count()} CPUs (other work skews the numbers)"
-    )
+    print(_bench.load_average_line(load_start, os.getloadavg()))
     headline = next((res for res in results if res.preset == "small"), results[0])
     print(f"token-reuse speedup of {headline.preset}: {headline.speedup:.2f}x (select_action latency OFF / ON)")
-    print(f"ratio: {headline.speedup:.4f}")
+    print(_bench.ratio_line(headline.speedup))
     return 0
 
 

