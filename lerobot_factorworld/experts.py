@@ -10,10 +10,15 @@ from .tasks import TaskSpec, get_task
 
 
 def expert_policy(task: str | TaskSpec) -> Any:
-    """The Meta-World v3 scripted policy of ``task`` (e.g. ``SawyerDoorOpenV3Policy`` for door-open)."""
+    """The Meta-World v3 scripted policy of ``task`` (e.g. ``SawyerDoorOpenV3Policy`` for door-open), or
+    the family's own expert (``pick``: :class:`lerobot_factorworld.pick.expert.PickExpert`)."""
     import metaworld.policies as policies
 
     task = task if isinstance(task, TaskSpec) else get_task(task)
+    if task.family == "pick":
+        from .pick.expert import PickExpert
+
+        return PickExpert()
     name = "Sawyer" + "".join(part.capitalize() for part in task.name.split("-")) + "V3Policy"
     return getattr(policies, name)()
 

@@ -9,6 +9,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from .pick import catalog as _pick
+
 
 @dataclass(frozen=True)
 class TaskSpec:
@@ -31,11 +33,19 @@ class TaskSpec:
             with them and explicit values outside them are rejected.
         object_family: The shape family (:func:`lerobot_factorworld.assets.asset_family`) the loose
             object looks like: no distractor is drawn from it, and the family split keeps it in train
-            (the default scene shows it). Empty for fixtures, which no table-top shape resembles.
+            (the default scene shows it). Empty for fixtures: their look-alikes are the families of the
+            Meta-World meshes their scene shows (the faucet's head and base, the drawer, the door handle),
+            read from the scene by :func:`lerobot_factorworld.assets.scenes.scene_shape_families`.
         goal: A fixed goal position (world frame, which is the table's) replacing the one Meta-World
             samples; ``None`` keeps Meta-World's goal at the centre of its range.
         success_radius: Object-to-goal distance (metres) that counts as success, replacing Meta-World's
             threshold; only for tasks whose success test is ``obj_to_target <= radius``.
+        family: A task family with its own scene content (``pick``: several named objects, one
+            instruction per episode, :mod:`lerobot_factorworld.pick`); empty for a Meta-World task.
+        metaworld_base: The Meta-World task whose scene and env class the family builds on (empty: the
+            task's own name).
+        lookalike_families: More shape families no distractor is drawn from (a family's objects).
+        unsupported: ``(factor, reason)`` pairs: factors that do not apply to this task, and why.
     """
 
     name: str
@@ -49,13 +59,17 @@ class TaskSpec:
     object_family: str = ""
     goal: tuple[float, float, float] | None = None
     success_radius: float | None = None
+    family: str = ""
+    metaworld_base: str = ""
+    lookalike_families: tuple[str, ...] = ()
+    unsupported: tuple[tuple[str, str], ...] = ()
 
     def limit(self, factor: str) -> tuple[tuple[float, ...], tuple[float, ...]] | None:
         return dict(self.limits).get(factor)
 
     @property
     def metaworld_name(self) -> str:
-        return f"{self.name}-v3"
+        return f"{self.metaworld_base or self.name}-v3"
 
     @property
     def gym_id(self) -> str:
@@ -118,6 +132,19 @@ _ROWS = (
     TaskSpec("lever-pull", "pull the lever", ("lever",), limits=(("object_pos", ((-0.1, -0.06), (0.1, 0.075))),)),
     TaskSpec("window-close", "slide the window closed", ("window",)),
     TaskSpec("window-open", "slide the window open", ("window",)),
+    # Language-conditioned picking among several objects (the paper's real-robot task), on pick-place's
+    # table; every fact about it lives in lerobot_factorworld/pick/catalog.py.
+    TaskSpec(
+        _pick.PICK_TASK,
+        _pick.DEFAULT_INSTRUCTION,
+        (),
+        True,
+        max_episode_steps=_pick.MAX_EPISODE_STEPS,
+        family="pick",
+        metaworld_base="pick-place",
+        lookalike_families=_pick.LOOKALIKE_FAMILIES,
+        unsupported=_pick.UNSUPPORTED_FACTORS,
+    ),
 )
 
 TASKS: dict[str, TaskSpec] = {row.name: row for row in _ROWS}

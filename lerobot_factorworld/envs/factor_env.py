@@ -29,11 +29,13 @@ Episode end:
 
 Info:
     ``is_success``, ``factors`` (the values the scene really had, defaults filled in), ``env_id``,
-    ``env_index``, ``metaworld_reward``.
+    ``env_index``, ``metaworld_reward``; in the ``pick`` family also ``pick`` (the episode's instruction,
+    named object and objects with their poses, :func:`lerobot_factorworld.pick.layout.episode_record`).
 """
 
 from __future__ import annotations
 
+import copy
 from collections import OrderedDict
 from collections.abc import Sequence
 from dataclasses import fields, replace
@@ -108,13 +110,14 @@ class FactorWorldEnv(gym.Env):
         self.observation_space = gym.spaces.Dict(spaces)
         self.action_space = gym.spaces.Box(-1.0, 1.0, (4,), dtype=np.float32)
 
-        self._scenes: OrderedDict[FactorValues, _Scene] = OrderedDict()
+        self._scenes: OrderedDict[tuple, _Scene] = OrderedDict()
         self._scene_cache_size = max(1, scene_cache_size)
         self._scene: _Scene | None = None
         self._config: SceneConfig | None = None
         self._steps = 0
         self._last_frame: np.ndarray | None = None
         self._episode_factors: dict[str, Any] = {}
+        self._episode_record: dict[str, Any] = {}
         self._env_index = 0
 
     # --- gymnasium API ------------------------------------------------------------------------
@@ -127,11 +130,13 @@ class FactorWorldEnv(gym.Env):
         if object_offset is None:
             low, high = self.object_pos_range
             object_offset = tuple(float(v) for v in self.np_random.uniform(low, high))
-        scene = self._scene_for(factors)
-        scene.reset(object_offset, factors.arm_pos or (0.0, 0.0, 0.0))
+        config = config.for_episode(self.np_random)  # a pick episode's target and phrasing; others draw nothing
+        scene = self._scene_for(config)
+        scene.reset(object_offset, factors.arm_pos or (0.0, 0.0, 0.0), config)
         self._scene, self._config, self._env_index, self._steps = scene, config, index, 0
         self.task_description = config.task_description
         self._episode_factors = resolved_factors(config, object_offset)
+        self._episode_record = config.episode_record(object_offset)
         obs = self._observe(scene.metaworld_obs)
         return obs, self._info(success=False, metaworld_reward=0.0)
 
@@ -219,11 +224,18 @@ class FactorWorldEnv(gym.Env):
             config = config.with_factors(**options["factors"])
         return config, index
 
-    def _scene_for(self, factors: FactorValues) -> _Scene:
-        key = replace(factors, **{name: None for name in PER_EPISODE_FACTORS})
+    def _scene_for(self, config: SceneConfig) -> _Scene:
+        factors = replace(config.factors, **{name: None for name in PER_EPISODE_FACTORS})
+        layout = config.pick
+        key = (factors, None if layout is None else layout.objects)  # what the compiled model depends on
         scene = self._scenes.pop(key, None)
         if scene is None:
-            scene = _Scene(self.task_spec, key, self.cameras, self.quality, self.image_size)
+            if layout is None:
+                scene = _Scene(self.task_spec, factors, self.cameras, self.quality, self.image_size)
+            else:
+                from ..pick.episode import PickScene
+
+                scene = PickScene(self.task_spec, factors, self.cameras, self.quality, self.image_size, layout)
             while len(self._scenes) >= self._scene_cache_size:
                 _, old = self._scenes.popitem(last=False)
                 old.close()
@@ -246,6 +258,7 @@ class FactorWorldEnv(gym.Env):
             "factors": dict(self._episode_factors),
             "env_id": self._config.env_id,
             "env_index": self._env_index,
+            **copy.deepcopy(self._episode_record),  # fresh per call: users keep what they are given
         }
 
 
@@ -277,7 +290,7 @@ class _Scene:
         self._renderer = None
         self.metaworld_obs: np.ndarray | None = None
 
-    def reset(self, object_offset: Sequence[float], arm_offset: Sequence[float]) -> None:
+    def reset(self, object_offset: Sequence[float], arm_offset: Sequence[float], config: SceneConfig) -> None:
         from .metaworld_bridge import reset_metaworld
 
         self.metaworld_obs = reset_metaworld(self.env, self.task, object_offset, arm_offset, self.rest_shift)

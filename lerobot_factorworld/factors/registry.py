@@ -245,7 +245,8 @@ def check_factor_names(names: Mapping[str, Any] | list[str] | tuple[str, ...]) -
 def support_reason(factor: str, task: str | TaskSpec) -> str | None:
     """``None`` if ``factor`` applies to ``task``, else why it does not."""
     spec = get_factor(factor)
-    return spec.applies(task if isinstance(task, TaskSpec) else get_task(task))
+    task = task if isinstance(task, TaskSpec) else get_task(task)
+    return dict(task.unsupported).get(factor) or spec.applies(task)
 
 
 def supported_factors(task: str | TaskSpec) -> tuple[str, ...]:

@@ -3,16 +3,21 @@
 Each factor draws from its own child RNG (``[seed, split, factor]``), so the same seeds always give the
 same configurations and adding a factor to a study never changes the values other factors get, except
 where two rules tie factors of one environment together: the object texture never equals the table
-texture (as in the public Factor World), and no distractor comes from the shape family of the task's
-object (no look-alike of it). A value that would break a rule is replaced without drawing again (see
-:func:`_draw`), so a rule changes only that value and never shifts any RNG stream.
+texture (as in the public Factor World; a table texture also avoids the textures a fixture object keeps
+when its texture is not varied), and no distractor comes from a shape family the task's scene shows (its
+object's, its fixtures' meshes: :func:`~lerobot_factorworld.assets.scenes.scene_shape_families`). A value
+that would break a rule is replaced without drawing again (see :func:`_draw`), so a rule changes only
+that value and never shifts any RNG stream. The rules bind sampled and shifted values only: a
+configuration written by hand is taken as given.
 """
 
 from __future__ import annotations
 
 import functools
-from collections.abc import Callable, Iterable, Mapping, Sequence
-from dataclasses import dataclass, field
+import hashlib
+import json
+from collections.abc import Callable, Collection, Iterable, Mapping, Sequence
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -20,6 +25,8 @@ import numpy as np
 
 from ..assets import DEFAULT_ASSET_SPLIT, DEFAULT_TABLE_TEXTURE, asset_family, check_asset_split
 from ..assets import split_names as asset_split_names
+from ..assets.scenes import scene_assets, scene_shape_families
+from ..pick.catalog import DEFAULT_OBJECTS, MAX_OBJECTS, MIN_OBJECTS
 from ..tasks import TaskSpec, get_task
 from .registry import (
     DISTRACTOR_AREA,
@@ -38,6 +45,7 @@ from .registry import (
 from .values import FactorValues, SceneConfig
 
 MAX_PLACEMENT_TRIES = 2000
+PICK_OBJECTS = (MIN_OBJECTS, DEFAULT_OBJECTS, MAX_OBJECTS)  # objects per pick scene: fewest, default, most
 
 
 @dataclass(frozen=True)
@@ -50,6 +58,7 @@ class SamplingOptions:
         shape_folder: A folder of meshes (.stl/.obj) to draw object shapes and distractors from.
         rgb_fraction: Probability that a texture draw is a flat RGB colour instead of an image.
         n_distractors: Number of distractor objects per environment.
+        n_objects: Objects on the table in a ``pick`` scene (3 to 6); other tasks ignore it.
         asset_split: How assets are split between train and eval: ``family`` (default) holds whole
             families out, so test textures and shapes are unlike any training one (the paper's unseen
             images and objects); ``variant`` splits name by name (new variants of seen families). In a
@@ -62,6 +71,7 @@ class SamplingOptions:
     rgb_fraction: float = 0.0
     n_distractors: int = 1
     asset_split: str = DEFAULT_ASSET_SPLIT
+    n_objects: int = PICK_OBJECTS[1]
 
     def __post_init__(self) -> None:
         check_asset_split(self.asset_split)
@@ -72,6 +82,8 @@ class SamplingOptions:
             raise ValueError(f"rgb_fraction must be in [0, 1], got {self.rgb_fraction}")
         if not 0 <= self.n_distractors <= MAX_DISTRACTORS:
             raise ValueError(f"n_distractors must be in [0, {MAX_DISTRACTORS}], got {self.n_distractors}")
+        if not PICK_OBJECTS[0] <= self.n_objects <= PICK_OBJECTS[2]:
+            raise ValueError(f"n_objects must be in [{PICK_OBJECTS[0]}, {PICK_OBJECTS[2]}], got {self.n_objects}")
         for folder in (self.texture_folder, self.shape_folder):
             if folder is not None and not Path(folder).is_dir():
                 raise FileNotFoundError(f"asset folder {folder} does not exist")
@@ -117,10 +129,13 @@ def _sample(
         return value[0] if spec.kind == "scalar" else value
     if name == "object_texture":
         table = scene.get("table_texture") or DEFAULT_TABLE_TEXTURE
-        return _sample_texture(rng, pools.texture, options, avoid=table)
-    if name in ("table_texture", "floor_texture"):
-        avoid = scene.get("object_texture") if name == "table_texture" else None
+        return _sample_texture(rng, pools.texture, options, avoid=(table,))
+    if name == "table_texture":  # the object's texture, or what its default scene paints it with
+        own = scene.get("object_texture")
+        avoid = (own,) if own else scene_assets(task.name).object_textures
         return _sample_texture(rng, pools.texture, options, avoid=avoid)
+    if name == "floor_texture":
+        return _sample_texture(rng, pools.texture, options, avoid=())
     if name == "object_shape":
         shapes = pools.shape
         taken = {shapes.family_of(item.shape) for item in scene.get("distractors") or ()}
@@ -172,7 +187,15 @@ def sample_configs(
     if n < 1:
         raise ValueError(f"the number of environments must be at least 1, got {n}")
     values = sample_factor_values(task, factors, n, seed, split, options)
-    return [SceneConfig(task.name, v, split=split, env_id=f"{task.name}/{split}/{i:03d}") for i, v in enumerate(values)]
+    layouts: list[Any] = [None] * n
+    if task.family == "pick":  # the objects on the table and what episodes name: their own seeded stream
+        from ..pick.sampling import sample_layouts
+
+        layouts = sample_layouts(n, seed, split, (options or SamplingOptions()).n_objects)
+    return [
+        SceneConfig(task.name, v, split=split, env_id=f"{task.name}/{split}/{i:03d}", pick=layout)
+        for i, (v, layout) in enumerate(zip(values, layouts, strict=True))
+    ]
 
 
 def shift_configs(
@@ -199,7 +222,7 @@ def shift_configs(
     for j, values in enumerate(new_values):
         parent = base[j % len(base)]
         replaced = parent.factors.set(**{name: getattr(values, name) for name in factors})
-        out.append(SceneConfig(task.name, replaced, parent.instruction, split, f"{task.name}/shift-{tag}/{j:03d}"))
+        out.append(replace(parent, factors=replaced, split=split, env_id=f"{task.name}/shift-{tag}/{j:03d}"))
     return out
 
 
@@ -244,11 +267,12 @@ class _Pools:
 
 
 def _draw(rng: np.random.Generator, pool: _Pool, allowed: Callable[[str], bool], what: str) -> str:
-    """One uniform draw from ``pool``; a name that breaks a rule is replaced without drawing again.
+    """A uniform draw among the names of ``pool`` that obey a rule; ``rng`` advances by one draw whatever
+    the rule did, so a rule changes only the value that broke it and never the stream of later draws.
 
-    The draw always consumes the same random numbers, so a rule changes only the value that broke it
-    and never the stream of later draws; the replacement (the ``k``-th allowed name, modulo) spreads
-    the excluded names' probability evenly over the allowed ones.
+    ``k`` is drawn from all ``n`` names; when ``pool.names[k]`` breaks the rule, the replacement is drawn
+    uniformly from the ``m`` allowed names by :func:`_aside` (which leaves ``rng`` as it is). Each allowed
+    name then has probability ``1/n + (n - m)/n * 1/m = 1/m``.
     """
     k = int(rng.integers(len(pool.names)))
     if allowed(pool.names[k]):
@@ -256,15 +280,22 @@ def _draw(rng: np.random.Generator, pool: _Pool, allowed: Callable[[str], bool],
     ok = [name for name in pool.names if allowed(name)]
     if not ok:
         raise ValueError(f"no {what} in the {pool.kind} pool obeys the rules between factors (all excluded)")
-    return ok[k % len(ok)]
+    return ok[int(_aside(rng).integers(len(ok)))]
 
 
-def _sample_texture(rng: np.random.Generator, pool: _Pool, options: SamplingOptions, avoid: str | None) -> str:
+def _aside(rng: np.random.Generator) -> np.random.Generator:
+    """A generator seeded by ``rng``'s current state (sha256 of it): as seeded as ``rng`` itself, and
+    drawing from it does not advance ``rng``."""
+    state = json.dumps(rng.bit_generator.state, sort_keys=True, default=lambda a: np.asarray(a).tolist())
+    return np.random.default_rng(int.from_bytes(hashlib.sha256(state.encode()).digest()[:16], "little"))
+
+
+def _sample_texture(rng: np.random.Generator, pool: _Pool, options: SamplingOptions, avoid: Collection[str]) -> str:
     # Always draw both numbers so the RNG stream does not depend on rgb_fraction's outcome.
     use_rgb = rng.random() < options.rgb_fraction
     rgb = format_rgb(tuple(rng.random(3)))
-    name = _draw(rng, pool, lambda texture: texture != avoid, "texture")
-    return rgb if use_rgb and rgb != avoid else name
+    name = _draw(rng, pool, lambda texture: texture not in avoid, "texture")
+    return rgb if use_rgb and rgb not in avoid else name
 
 
 def _sample_distractors(
@@ -274,13 +305,13 @@ def _sample_distractors(
 
     shapes, textures = pools.shape, pools.texture
     own_shape = scene.get("object_shape")
-    lookalike = shapes.family_of(own_shape) if own_shape else task.object_family
+    lookalike = set(scene_shape_families(task.name, shapes.family_of(own_shape) if own_shape else None))
     blocked = [tuple(b) for b in keepout_boxes(task.name)]
     (xlo, ylo), (xhi, yhi) = DISTRACTOR_AREA
     items = []
     for _ in range(options.n_distractors):
-        shape = _draw(rng, shapes, lambda name: shapes.family_of(name) != lookalike, "distractor shape")
-        texture = _sample_texture(rng, textures, options, avoid=None)
+        shape = _draw(rng, shapes, lambda name: shapes.family_of(name) not in lookalike, "distractor shape")
+        texture = _sample_texture(rng, textures, options, avoid=())
         size = float(rng.uniform(*DISTRACTOR_SIZE))
         yaw = float(rng.uniform(0.0, 2 * np.pi))
         half = size / 2

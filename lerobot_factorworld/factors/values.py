@@ -84,6 +84,9 @@ class SceneConfig:
         instruction: Language instruction; ``None`` uses the task's own.
         split: Asset split the values were drawn from (``train`` or ``eval``); metadata only.
         env_id: Identifier of this environment within a study, e.g. ``pick-place/train/003``.
+        pick: For the ``pick`` family: the objects, their poses, and which one each episode names
+            (:class:`lerobot_factorworld.pick.layout.PickLayout`; ``None`` there gives the default
+            scene); the instruction then comes from it, never from ``instruction``. ``None`` elsewhere.
     """
 
     task: str
@@ -91,6 +94,7 @@ class SceneConfig:
     instruction: str | None = None
     split: str = "train"
     env_id: str = ""
+    pick: Any = None
 
     def __post_init__(self) -> None:
         task = get_task(self.task)
@@ -100,10 +104,46 @@ class SceneConfig:
         if isinstance(self.factors, dict):
             object.__setattr__(self, "factors", FactorValues.from_dict(self.factors))
         check_task_support(task, self.factors.non_default())
+        self._check_pick(task.family == "pick")
+
+    def _check_pick(self, is_pick: bool) -> None:
+        if not is_pick:
+            if self.pick is not None:
+                raise ValueError(f"task {self.task!r} takes no pick layout (only the pick family does)")
+            return
+        from ..pick.layout import PickLayout, default_layout
+
+        if isinstance(self.pick, dict):
+            object.__setattr__(self, "pick", PickLayout.from_dict(self.pick))
+        elif self.pick is None:
+            object.__setattr__(self, "pick", default_layout())
+        if not isinstance(self.pick, PickLayout):
+            raise ValueError(f"pick must be a PickLayout or a dict, got {type(self.pick).__name__}")
+        if self.instruction is not None:
+            raise ValueError(
+                "a pick configuration's instruction comes from its layout (target and phrasing template); "
+                "leave instruction unset"
+            )
 
     @property
     def task_description(self) -> str:
+        if self.pick is not None and self.pick.instruction:
+            return self.pick.instruction
         return self.instruction or get_task(self.task).instruction
+
+    def for_episode(self, rng: Any) -> SceneConfig:
+        """The configuration of one episode: a pick layout's target and phrasing drawn from ``rng`` where
+        not pinned (every other configuration is returned unchanged and draws nothing)."""
+        return self if self.pick is None else replace(self, pick=self.pick.for_episode(rng))
+
+    def episode_record(self, object_offset: Any) -> dict[str, Any]:
+        """What an episode of this (episode) configuration records besides its factors: a pick episode's
+        instruction, target and objects (``{"pick": ...}``); nothing for other tasks."""
+        if self.pick is None:
+            return {}
+        from ..pick.layout import episode_record
+
+        return {"pick": episode_record(self.pick, object_offset)}
 
     def with_factors(self, **values: Any) -> SceneConfig:
         return replace(self, factors=self.factors.set(**values))
@@ -115,6 +155,7 @@ class SceneConfig:
             "instruction": self.instruction,
             "split": self.split,
             "env_id": self.env_id,
+            **({"pick": self.pick.to_dict()} if self.pick is not None else {}),
         }
 
     @classmethod
@@ -133,6 +174,9 @@ class SceneConfig:
         lines = [f"SceneConfig {self.env_id or '(unnamed)'}: task={self.task} split={self.split}"]
         for name, value in self.factors.non_default().items():
             lines.append(f"  {name:15s} {_format(value)}")
+        if self.pick is not None:
+            lines.append(f"  {'pick objects':15s} {', '.join(self.pick.names)}")
+            lines.append(f"  {'pick target':15s} {self.pick.target or 'per episode: ' + ', '.join(self.pick.candidates)}")
         if len(lines) == 1:
             lines.append("  (default scene)")
         return "\n".join(lines)

@@ -34,6 +34,10 @@ def keepout_boxes(task_name: str) -> np.ndarray:
     from ..factors.values import FactorValues, SceneConfig
 
     task = get_task(task_name)
+    if task.family == "pick":  # objects change per environment: keep the whole pick workspace free
+        from ..pick.layout import workspace_keepout
+
+        return np.array([workspace_keepout(CLEARANCE)], dtype=np.float64)
     widest = list(get_factor("object_pos").ranges)[-1]
     low, high = factor_range(task, "object_pos", widest)
     starts = [(0.0, 0.0), *itertools.product((low[0], high[0]), (low[1], high[1]))]

@@ -1,0 +1,139 @@
+"""The pick family's only contact with Meta-World internals (as :mod:`lerobot_factorworld.envs.metaworld_bridge`
+is for the other tasks): Meta-World's pick-place env class, on a pick scene.
+
+What changes from pick-place:
+
+- ``reset_model`` puts every object at its pose (plus the episode's arrangement offset) on the table;
+- the state vector's object slot (what scripted experts read) is the named object's pose, and its goal
+  slot the point the named object must be lifted to;
+- ``evaluate_state`` judges success on the named object only: its centre must stay at least
+  :data:`~.catalog.LIFT_HEIGHT` above where it rested for :data:`~.catalog.HOLD_STEPS` consecutive
+  steps, and lifting any other object by :data:`~.catalog.WRONG_LIFT_HEIGHT` first fails the episode
+  for good. Meta-World calls it exactly once per step, which is what the hold counter counts.
+"""
+
+from __future__ import annotations
+
+from functools import cache
+from typing import Any
+
+import mujoco
+import numpy as np
+from gymnasium.spaces import Box
+
+from ..scene.build import TABLE_CENTER
+from ..tasks import TaskSpec
+from .catalog import HOLD_STEPS, LIFT_HEIGHT, LIFT_MARGIN, WRONG_LIFT_HEIGHT, get_object
+from .layout import PickLayout, PlacedObject
+from .scene import body_name, joint_name
+
+_NO_TRUNCATION = 10**9  # FactorWorldEnv truncates itself
+GOAL_BOX = Box(np.array([-1.0, 0.0, 0.0]), np.array([1.0, 1.5, 0.6]), dtype=np.float64)  # where a lift goal can be
+
+
+@cache
+def _env_class(metaworld_name: str) -> type:
+    from metaworld.env_dict import ALL_V3_ENVIRONMENTS
+
+    base = ALL_V3_ENVIRONMENTS[metaworld_name]
+
+    def _initialize_simulation(self) -> tuple[mujoco.MjModel, mujoco.MjData]:
+        return self._factorworld_model, mujoco.MjData(self._factorworld_model)
+
+    def _get_pos_objects(self) -> np.ndarray:
+        return self.data.body(self._pick_target_body).xpos.copy()
+
+    def _get_quat_objects(self) -> np.ndarray:
+        return self.data.body(self._pick_target_body).xquat[[1, 2, 3, 0]].copy()  # (x, y, z, w) as Meta-World's
+
+    def _get_id_main_object(self) -> int:
+        return int(self.model.body_geomadr[self.model.body(self._pick_target_body).id])
+
+    def reset_model(self) -> np.ndarray:
+        self._reset_hand()
+        qpos, qvel = self.data.qpos.copy(), self.data.qvel.copy()
+        for item in self._pick_objects:
+            joint = self.model.joint(joint_name(item.name))
+            rest = get_object(item.name).family.half_height
+            qpos[joint.qposadr[0] : joint.qposadr[0] + 7] = [
+                *(TABLE_CENTER + [item.x, item.y, rest]),
+                np.cos(item.yaw / 2), 0.0, 0.0, np.sin(item.yaw / 2),
+            ]
+            qvel[joint.dofadr[0] : joint.dofadr[0] + 6] = 0.0
+        self.set_state(qpos, qvel)
+        self._pick_rest = {item.name: float(self.data.body(body_name(item.name)).xpos[2]) for item in self._pick_objects}
+        target = self.data.body(self._pick_target_body).xpos
+        self._target_pos = np.array([target[0], target[1], self._pick_rest[self._pick_target] + LIFT_HEIGHT + LIFT_MARGIN])
+        self.obj_init_pos = target.copy()
+        self.init_tcp = self.tcp_center
+        self.init_left_pad = self.get_body_com("leftpad")
+        self.init_right_pad = self.get_body_com("rightpad")
+        self._pick_hold, self._pick_wrong = 0, ""
+        return self._get_obs()
+
+    def evaluate_state(self, obs: np.ndarray, action: np.ndarray) -> tuple[float, dict[str, Any]]:
+        heights = {
+            name: float(self.data.body(body_name(name)).xpos[2]) - rest for name, rest in self._pick_rest.items()
+        }
+        if not self._pick_wrong:
+            lifted = [n for n, h in heights.items() if n != self._pick_target and h >= WRONG_LIFT_HEIGHT]
+            self._pick_wrong = lifted[0] if lifted else ""
+        self._pick_hold = self._pick_hold + 1 if heights[self._pick_target] >= LIFT_HEIGHT else 0
+        success = not self._pick_wrong and self._pick_hold >= HOLD_STEPS
+        tcp_to_obj = float(np.linalg.norm(obs[4:7] - self.tcp_center))
+        info = {
+            "success": float(success),
+            "near_object": float(tcp_to_obj <= 0.03),
+            "grasp_success": float(heights[self._pick_target] > 0.01 and self.touching_main_object),
+            "grasp_reward": 0.0,
+            "in_place_reward": 0.0,
+            "obj_to_target": float(np.linalg.norm(obs[4:7] - self._target_pos)),
+            "unscaled_reward": float(success),
+            "target_height": heights[self._pick_target],
+            "wrong_object": self._pick_wrong,
+        }
+        return float(success), info
+
+    return type(
+        f"FactorWorldPick{base.__name__}",
+        (base,),
+        {
+            "_initialize_simulation": _initialize_simulation,
+            "_get_pos_objects": _get_pos_objects,
+            "_get_quat_objects": _get_quat_objects,
+            "_get_id_main_object": _get_id_main_object,
+            "reset_model": reset_model,
+            "evaluate_state": evaluate_state,
+            "_target_site_config": property(lambda self: []),  # no goal marker in a pick scene
+        },
+    )
+
+
+def make_pick_env(task: TaskSpec, model: mujoco.MjModel, layout: PickLayout) -> Any:
+    """A Meta-World env simulating the pick scene ``model`` (compiled from ``layout``'s objects)."""
+    cls = _env_class(task.metaworld_name)
+    env = cls.__new__(cls)
+    env._factorworld_model = model
+    env._pick_objects = layout.objects
+    env._pick_target = layout.objects[0].name  # until the first episode names one
+    env._pick_target_body = body_name(env._pick_target)
+    env._pick_rest, env._pick_hold, env._pick_wrong = {}, 0, ""
+    env.__init__()
+    env.goal_space = GOAL_BOX
+    env._partially_observable = False  # the expert reads the lift goal from the state vector
+    env.__dict__.pop("sawyer_observation_space", None)
+    env._set_task_called = True
+    env._freeze_rand_vec = True
+    env.max_path_length = _NO_TRUNCATION
+    env._factorworld_default_hand = np.array(env.init_config["hand_init_pos"], dtype=np.float64)
+    return env
+
+
+def reset_pick(env: Any, objects: tuple[PlacedObject, ...], target: str, arm_offset) -> np.ndarray:
+    """Reset with ``objects`` at their episode poses, ``target`` named, the gripper moved by ``arm_offset``."""
+    env._pick_objects = objects
+    env._pick_target = target
+    env._pick_target_body = body_name(target)
+    env.hand_init_pos = env._factorworld_default_hand + np.asarray(arm_offset, dtype=np.float64)
+    obs, _ = env.reset()
+    return obs

@@ -1,0 +1,147 @@
+"""Seeded pick layouts for training environments, and the two language-generalization conditions.
+
+Layouts draw from their own stream (``[seed, split, LAYOUT_STREAM]``), apart from every factor's, so
+adding pick content never changes a factor value and the same seeds always give the same scenes.
+
+Conditions (evaluated like a shifted factor: test environment ``j`` derives from training environment
+``j % N``, same factors, same object poses):
+
+- ``held_out_phrasings``: the same scenes and targets, phrased with the held-out templates only;
+- ``held_out_objects``: the same object poses, holding held-out objects (new shape-colour pairs),
+  and every episode names one of them.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import replace
+
+import numpy as np
+
+from .catalog import SLOT_JITTER, SLOTS, SPLITS, get_object, split_objects
+from .layout import PickLayout, PlacedObject
+
+LAYOUT_STREAM = 1_000  # beyond every factor's index in ``factor_rng``
+HELD_OUT_PHRASINGS = "held_out_phrasings"
+HELD_OUT_OBJECTS = "held_out_objects"
+CONDITIONS = (HELD_OUT_PHRASINGS, HELD_OUT_OBJECTS)
+"""The language-generalization conditions (``--env.shifts='[held_out_phrasings,held_out_objects]'``)."""
+MAX_TRIES = 200
+
+
+def layout_rng(seed: int, split: str, *extra: int) -> np.random.Generator:
+    return np.random.default_rng([seed, SPLITS.index(split), LAYOUT_STREAM, *extra])
+
+
+def choose_objects(
+    rng: np.random.Generator | None, primary: Sequence[str], fill: Sequence[str], k: int
+) -> tuple[str, ...]:
+    """``k`` objects with distinct shapes and colours: as many from ``primary`` as fit, then from ``fill``.
+
+    With ``rng`` the pools are shuffled (a few greedy passes keep the largest set found); without it
+    they are taken in order (the default scene).
+    """
+    best: tuple[str, ...] = ()
+    for _ in range(MAX_TRIES if rng is not None else 1):
+        first = list(primary) if rng is None else [primary[i] for i in rng.permutation(len(primary))]
+        chosen = _greedy(first, [], k)
+        if len(chosen) > len(best):
+            best = tuple(chosen)
+        if len(best) == k:
+            break
+    if len(best) < k:
+        rest = list(fill) if rng is None else [fill[i] for i in rng.permutation(len(fill))]
+        best = tuple(_greedy(rest, list(best), k))
+    if len(best) < k:
+        raise ValueError(f"cannot find {k} objects with distinct shapes and colours in the pools")
+    return best
+
+
+def _greedy(pool: Sequence[str], chosen: list[str], k: int) -> list[str]:
+    chosen = list(chosen)
+    for name in pool:
+        if len(chosen) == k:
+            break
+        obj = get_object(name)
+        if all(get_object(c).shape != obj.shape and get_object(c).colour != obj.colour for c in chosen):
+            chosen.append(name)
+    return chosen
+
+
+def _poses(rng: np.random.Generator, names: Sequence[str], slots: Sequence[int]) -> tuple[PlacedObject, ...]:
+    out = []
+    for name, slot in zip(names, slots, strict=True):
+        x, y = SLOTS[slot]
+        jitter = rng.uniform(-SLOT_JITTER, SLOT_JITTER, size=2)
+        out.append(PlacedObject(name, x + float(jitter[0]), y + float(jitter[1]), _yaw(rng, name)))
+    return tuple(out)
+
+
+def _yaw(rng: np.random.Generator, name: str) -> float:
+    """A yaw the gripper can grasp from: within the family's limit, either way round."""
+    limit = get_object(name).family.max_yaw
+    yaw, flip = float(rng.uniform(-limit, limit)), bool(rng.integers(2))
+    return yaw + (np.pi if flip and limit < np.pi else 0.0)
+
+
+def sample_layouts(n: int, seed: int, split: str = "train", n_objects: int = 4) -> list[PickLayout]:
+    """``n`` layouts of ``n_objects`` objects from ``split``'s objects (``eval``: held-out objects named)."""
+    rng = layout_rng(seed, split)
+    out = []
+    for _ in range(n):
+        if split == "train":
+            names = choose_objects(rng, split_objects("train"), (), n_objects)
+        else:
+            names = choose_objects(rng, split_objects("eval"), split_objects("train"), n_objects)
+        slots = rng.permutation(len(SLOTS))[:n_objects]
+        targets = () if split == "train" else tuple(n for n in names if n in split_objects("eval"))
+        out.append(PickLayout(_poses(rng, names, slots), targets=targets))
+    return out
+
+
+def held_out_phrasings(layouts: Sequence[PickLayout]) -> list[PickLayout]:
+    """The same layouts, phrased with held-out templates (a pinned template is dropped)."""
+    return [replace(layout, phrasings="eval", template="") for layout in layouts]
+
+
+def held_out_objects(layouts: Sequence[PickLayout], seed: int) -> list[PickLayout]:
+    """The same object poses holding held-out objects; every episode names one of them."""
+    rng = layout_rng(seed, "eval", 1)
+    out = []
+    for layout in layouts:
+        k = len(layout.objects)
+        names = choose_objects(rng, split_objects("eval"), split_objects("train"), k)
+        objects = tuple(
+            PlacedObject(name, old.x, old.y, _yaw(rng, name)) for name, old in zip(names, layout.objects, strict=True)
+        )
+        held_out = tuple(n for n in names if n in split_objects("eval"))
+        out.append(replace(layout, objects=objects, targets=held_out, target=""))
+    return out
+
+
+def check_condition(condition: str, tasks: Sequence[str]) -> None:
+    """A language condition applies to pick tasks only (the error names them)."""
+    from ..tasks import get_task
+
+    others = [t for t in tasks if get_task(t).family != "pick"]
+    if others:
+        raise ValueError(
+            f"condition {condition!r} applies to the pick family only (its held-out phrasings and objects), "
+            f"not to {', '.join(others)}"
+        )
+
+
+def language_shift(base: Sequence, condition: str, n: int, seed: int) -> list:
+    """Test environments of a language condition: environment ``j`` is training environment ``j % N``
+    with held-out phrasings, or with held-out objects at the same poses (every other value kept)."""
+    if condition not in CONDITIONS:
+        raise ValueError(f"unknown language condition {condition!r}; valid: {', '.join(CONDITIONS)}")
+    parents = [base[j % len(base)] for j in range(n)]
+    if any(p.pick is None for p in parents):
+        check_condition(condition, sorted({p.task for p in parents}))
+    layouts = [p.pick for p in parents]
+    layouts = held_out_phrasings(layouts) if condition == HELD_OUT_PHRASINGS else held_out_objects(layouts, seed)
+    return [
+        replace(parent, pick=layout, split="eval", env_id=f"{parent.task}/{condition}/{j:03d}")
+        for j, (parent, layout) in enumerate(zip(parents, layouts, strict=True))
+    ]
