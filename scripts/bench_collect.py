@@ -109,7 +109,7 @@ def run_metaworld(task: str, demos: int, root: Path, seed: int) -> dict:
     from lerobot.utils.constants import ACTION, OBS_IMAGES, OBS_STATE
     from tqdm import tqdm
 
-    from lerobot_factorworld.datasets.collect import episode_seed
+    from lerobot_factorworld.datasets.collect import episode_seed, noise_rng
     from lerobot_factorworld.datasets.schema import frame_features
     from lerobot_factorworld.envs.factor_env import CONTROL_FPS
     from lerobot_factorworld.experts import expert_action, expert_policy
@@ -146,7 +146,7 @@ def run_metaworld(task: str, demos: int, root: Path, seed: int) -> dict:
             for demo in range(demos):
                 for attempt in range(MAX_ATTEMPTS):
                     ep_seed = episode_seed(seed, 0, 0, demo, attempt)
-                    rng = np.random.default_rng(ep_seed)
+                    rng = noise_rng(ep_seed)  # the collector's own noise stream, independent of the env's
                     obs, _ = env.reset(seed=ep_seed)
                     image = env.render()
                     frames, success = [], False
