@@ -56,17 +56,19 @@ def rate(successes: list[bool]) -> str:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--out", default="outputs/pick")
+    parser.add_argument("--data", default=None, help="the dataset the policy was trained on (default: <out>/data)")
     parser.add_argument("--test_envs", type=int, default=10)
     parser.add_argument("--start_seed", type=int, default=1000)
     args = parser.parse_args()
     out = Path(args.out)
+    data = Path(args.data) if args.data else out / "data"
     results, by_shape, by_template = {}, {}, {}
     for condition in PAPER:
         path = out / "eval" / condition / "eval_info.json"
         if not path.is_file():
             continue
         successes = [bool(s) for s in json.loads(path.read_text())["per_task"][0]["metrics"]["successes"]]
-        records = condition_records(str(out / "data"), condition, len(successes), args.test_envs, args.start_seed)
+        records = condition_records(str(data), condition, len(successes), args.test_envs, args.start_seed)
         results[condition] = successes
         for shape, outcomes in breakdown(successes, records, "shape").items():
             by_shape[(condition, shape)] = outcomes

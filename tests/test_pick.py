@@ -192,6 +192,28 @@ def test_held_out_objects_and_phrasings_never_appear_in_training_environments(ma
                 assert record["template"] in catalog.split_templates("eval")
     # the phrasing condition keeps everything else: same scene, same target per seed
     assert [c.pick.objects for c in held["held_out_phrasings"]] == [c.pick.objects for c in configs[:4]]
+    train_env = make_env(TASK, configs[:4], cameras=(), scene_cache_size=1)
+    phrased_env = make_env(TASK, held["held_out_phrasings"], cameras=(), scene_cache_size=1)
+    for s in range(8):
+        assert phrased_env.reset(seed=s)[1]["pick"]["target"] == train_env.reset(seed=s)[1]["pick"]["target"]
+
+
+def test_episodes_are_paired_across_conditions_even_when_a_shift_pins_the_object_position(make_env):
+    """Episode i names the same object in every condition, including an ``object_pos`` shift (which pins
+    the arrangement offset instead of drawing it): conditions are compared episode by episode."""
+    configs = sample_configs(TASK, 4, seed=3)
+    conditions = {"train": configs}
+    for factor in ("object_pos", "light", "distractors", "table_pos"):
+        conditions[factor] = shift_configs(configs, factor, 4, seed=5)
+    assert all(c.factors.object_pos is not None for c in conditions["object_pos"])
+    per_condition = {}
+    for name, suite in conditions.items():
+        env = make_env(TASK, suite, cameras=(), scene_cache_size=1)
+        per_condition[name] = [
+            (r["target"], r["template"]) for r in (env.reset(seed=1000 + i)[1]["pick"] for i in range(8))
+        ]
+    assert len({tuple(v) for v in per_condition.values()}) == 1, per_condition
+    assert len({target for target, _ in per_condition["train"]}) > 1
 
 
 # --- success is about the named object only -------------------------------------------------------------------

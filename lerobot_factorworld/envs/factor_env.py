@@ -126,10 +126,11 @@ class FactorWorldEnv(gym.Env):
         super().reset(seed=seed)
         config, index = self._select_config(seed, options or {})
         factors = config.factors
-        object_offset = factors.object_pos
-        if object_offset is None:
-            low, high = self.object_pos_range
-            object_offset = tuple(float(v) for v in self.np_random.uniform(low, high))
+        # The object start is always drawn, even when the condition pins object_pos, so that every draw after
+        # it (a pick episode's target and phrasing) is the same for a seed in every condition: paired episodes.
+        low, high = self.object_pos_range
+        drawn = tuple(float(v) for v in self.np_random.uniform(low, high))
+        object_offset = factors.object_pos if factors.object_pos is not None else drawn
         config = config.for_episode(self.np_random)  # a pick episode's target and phrasing; others draw nothing
         scene = self._scene_for(config)
         scene.reset(object_offset, factors.arm_pos or (0.0, 0.0, 0.0), config)
