@@ -62,7 +62,7 @@ def main() -> None:
     args = parser.parse_args()
     out = Path(args.out)
     data = Path(args.data) if args.data else out / "data"
-    results, by_shape, by_template = {}, {}, {}
+    results, by_target, by_shape, by_template = {}, {}, {}, {}
     for condition in PAPER:
         path = out / "eval" / condition / "eval_info.json"
         if not path.is_file():
@@ -70,6 +70,8 @@ def main() -> None:
         successes = [bool(s) for s in json.loads(path.read_text())["per_task"][0]["metrics"]["successes"]]
         records = condition_records(str(data), condition, len(successes), args.test_envs, args.start_seed)
         results[condition] = successes
+        for target, outcomes in breakdown(successes, records, "target").items():
+            by_target[(condition, target)] = outcomes
         for shape, outcomes in breakdown(successes, records, "shape").items():
             by_shape[(condition, shape)] = outcomes
         for template, outcomes in breakdown(successes, records, "template").items():
@@ -85,7 +87,8 @@ def main() -> None:
         paper = sorted(shifted, key=lambda c: -PAPER[c][1])
         print(f"\nordering, easiest first: simulation {', '.join(sim)}; paper {', '.join(paper)}")
         print(f"Spearman rank correlation over the {len(shifted)} shifted conditions: {_spearman(results, shifted):.2f}")
-    for title, table in (("named object's shape", by_shape), ("phrasing template", by_template)):
+    tables = (("named object", by_target), ("named object's shape", by_shape), ("phrasing template", by_template))
+    for title, table in tables:
         keys = sorted({k for _, k in table})
         conditions = list(results)
         print(f"\n| {title} | " + " | ".join(conditions) + " |")

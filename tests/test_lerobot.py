@@ -80,6 +80,7 @@ def test_lerobot_eval_runs_a_lerobot_policy_on_factorworld(tmp_path):
         ({"task": "door-open", "shifts": ["light+object_size"]}, "factor 'object_size' does not apply"),
         ({"include_train": False}, "nothing to evaluate"),
         ({"configs_path": "/nonexistent/envs.json"}, "configs_path /nonexistent/envs.json does not exist"),
+        ({"dataset_root": "/data", "configs_path": "/envs.json"}, "give dataset_root or configs_path, not both"),
     ],
 )
 def test_env_config_refuses_bad_settings_when_parsed(settings, expected):
@@ -122,3 +123,15 @@ def test_lerobot_eval_fails_on_a_bad_env_setting_before_building_a_policy(tmp_pa
     assert "factor 'object_shape' does not apply to task 'door-open'" in output, output[-3000:]
     assert "Making policy" not in output and "Making environment" not in output
     assert not (tmp_path / "eval").exists()
+
+
+def test_env_config_warns_when_test_environments_cannot_pair_with_training_environments(caplog):
+    import logging
+
+    from lerobot_factorworld.envs.configs import FactorWorldEnvConfig
+
+    with caplog.at_level(logging.WARNING, logger="lerobot_factorworld.envs.configs"):
+        FactorWorldEnvConfig(task="door-open", n_train_envs=2, shifts=["light"], n_test_envs=4).suites("door-open")
+        assert "not a multiple" not in caplog.text
+        FactorWorldEnvConfig(task="door-open", n_train_envs=2, shifts=["light"], n_test_envs=3).suites("door-open")
+    assert "n_test_envs=3 is not a multiple of 2" in caplog.text

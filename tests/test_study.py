@@ -66,6 +66,24 @@ def test_pair_metric_interaction_mean_se_and_spearman():
     assert math.isnan(metrics.spearman({"a": 1, "b": 2}, {"a": 1, "b": 2}))
 
 
+def test_the_pairs_section_counts_cells_whose_pair_metric_is_undefined():
+    from lerobot_factorworld.study.config import StudyConfig
+    from lerobot_factorworld.study.report import DEFAULT_WIDTHS, _pairs_section
+
+    cfg = StudyConfig(tasks=["door-open"], factors=["light", "camera_pos"], pairs=["light+camera_pos"], seeds=[0, 1])
+
+    def row(seed, condition, rate, gap):
+        n_factors = condition.count("+") + 1
+        return {"method": cfg.methods[0].name, "task": "door-open", "n_train_envs": 5, "seed": seed,
+                "widths": DEFAULT_WIDTHS, "condition": condition, "n_factors": n_factors,
+                "success_rate": rate, "gap": gap}
+
+    rows = [row(0, "light", 0.5, 0.5), row(0, "camera_pos", 0.0, 1.0), row(0, "light+camera_pos", 0.0, 1.0),
+            row(1, "light", 0.5, 0.5), row(1, "camera_pos", 0.4, 0.6), row(1, "light+camera_pos", 0.2, 0.8)]
+    text = "\n".join(_pairs_section(cfg, rows))
+    assert "| light+camera_pos | -0.500 | " in text and "| 1 of 2 |" in text  # seed 1: (0.2 - 0.4) / 0.4
+
+
 # --- protocol -----------------------------------------------------------------------------------
 
 
@@ -126,6 +144,19 @@ def test_episodes_visit_every_environment_equally_and_pair_object_starts(caplog)
     with caplog.at_level(logging.WARNING, logger="lerobot_factorworld.study.conditions"):
         _run_episodes(replace(cfg, include_train=False), batch_size=1, episodes=3)
     assert "visit 3 of its 4 environments" in caplog.text
+
+
+def test_coverage_of_batched_resets_does_not_count_lerobot_evals_padding_as_scored():
+    from lerobot_factorworld.study.conditions import reset_coverage
+
+    # 15 episodes in batches of 10 reset 20 seeds; only the first 15 are scored: never claim "equal"
+    unequal, message = reset_coverage(range(1000, 1020), 10, 10, "light")
+    assert not unequal and "only if --eval.n_episodes is one of 20" in message
+    assert reset_coverage(range(1000, 1020), 10, 1, "light") == (False, coverage(range(1000, 1020), 10).describe("light"))
+    unequal, message = reset_coverage(range(1000, 1006), 4, 3, "light")  # 4, 5 or 6 scored: 4 is equal
+    assert not unequal and "one of 4 " in message
+    assert reset_coverage(range(1000, 1003), 4, 3, "light")[0]  # 1..3 scored: never equal
+    assert reset_coverage(range(1000, 1008), 1, 4, "train") == (False, coverage(range(1000, 1008), 1).describe("train"))
 
 
 # --- the toy study ------------------------------------------------------------------------------

@@ -7,6 +7,7 @@ environments drawn from the held-out split), e.g. ``--env.shifts='[camera_pos,li
 
 from __future__ import annotations
 
+import logging
 from dataclasses import dataclass, field
 from functools import partial
 
@@ -30,6 +31,8 @@ from ..validation import (
     check_tasks,
 )
 from .factor_env import CONTROL_FPS, FactorWorldEnv
+
+logger = logging.getLogger(__name__)
 
 AGENT_POS_DIM = 8
 ACTION_DIM = 4
@@ -146,6 +149,11 @@ class FactorWorldEnvConfig(EnvConfig):
 
     def _resolve_train_condition(self) -> None:
         """Fill N, factors, seed and sampling from ``dataset_root`` (refusing disagreements) or the defaults."""
+        if self.configs_path and self.dataset_root:
+            raise ValueError(
+                "give dataset_root or configs_path, not both: each defines the training environments "
+                f"(dataset_root={self.dataset_root}, configs_path={self.configs_path})"
+            )
         if self.dataset_root is None:
             self.n_train_envs = DEFAULT_N_TRAIN_ENVS if self.n_train_envs is None else self.n_train_envs
             self.train_factors = list(PAPER_STUDY_FACTORS) if self.train_factors is None else self.train_factors
@@ -209,6 +217,16 @@ class FactorWorldEnvConfig(EnvConfig):
             self.sampling,
             train_configs,
         )
+        n_train = len(suites[TRAIN_SUITE])
+        if len(suites) > 1 and self.n_test_envs % n_train:
+            logger.warning(
+                "factorworld: test environment j derives from training environment j %% %d; n_test_envs=%d is not "
+                "a multiple of %d, so the training environments are unequally represented in the shifted "
+                "conditions and their gaps are not paired environment by environment",
+                n_train,
+                self.n_test_envs,
+                n_train,
+            )
         if not self.include_train:
             suites.pop(TRAIN_SUITE)
         return suites

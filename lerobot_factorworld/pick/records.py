@@ -19,7 +19,8 @@ from .catalog import get_object
 
 BREAKDOWN_FILE = "pick_breakdowns.csv"
 BREAKDOWN_COLUMNS = ("method", "task", "n_train_envs", "seed", "condition", "by", "value", "episodes", "successes")
-BY = ("target", "shape", "template")
+BY = ("target", "shape", "template", "instruction")
+MARKDOWN_BY = ("target", "shape", "template")  # instructions are many: in the CSV only
 
 
 def episode_records(configs: Sequence[Any], seeds: Sequence[int], object_pos_width: str | None = None) -> list[dict]:
@@ -38,8 +39,8 @@ def episode_records(configs: Sequence[Any], seeds: Sequence[int], object_pos_wid
 
 
 def breakdown(successes: Sequence[bool], records: Sequence[dict], by: str) -> dict[str, list[bool]]:
-    """Outcomes grouped by the named object (``target``), its shape family (``shape``) or the phrasing
-    template (``template``)."""
+    """Outcomes grouped by the named object (``target``), its shape family (``shape``), the phrasing
+    template (``template``) or the instruction string itself (``instruction``)."""
     if by not in BY:
         raise ValueError(f"unknown breakdown {by!r}; valid: {', '.join(BY)}")
     groups: dict[str, list[bool]] = defaultdict(list)
@@ -81,18 +82,20 @@ def write_study_breakdowns(plan: Any, study_dir: str | Path) -> list[str]:
         writer = csv.DictWriter(f, fieldnames=BREAKDOWN_COLUMNS, lineterminator="\n")
         writer.writeheader()
         writer.writerows(rows)
-    lines = ["## Pick: success per named object's shape and per phrasing", "",
-             f"Summed over methods, N and seeds; per object and per instruction in `{BREAKDOWN_FILE}`.", ""]
-    for by in ("shape", "template"):
-        conditions = list(dict.fromkeys(r["condition"] for r in rows))
-        values = sorted({r["value"] for r in rows if r["by"] == by})
-        lines += [f"| {by} | " + " | ".join(conditions) + " |", "|---" * (len(conditions) + 1) + "|"]
-        for value in values:
-            cells = []
-            for condition in conditions:
-                hits = [r for r in rows if r["by"] == by and r["value"] == value and r["condition"] == condition]
-                k, n = sum(r["successes"] for r in hits), sum(r["episodes"] for r in hits)
-                cells.append(f"{k}/{n}" if n else "")
-            lines.append(f"| {value} | " + " | ".join(cells) + " |")
-        lines.append("")
+    lines = ["## Pick: success per named object, shape and phrasing", "",
+             f"Summed over N and seeds, per method; per instruction in `{BREAKDOWN_FILE}`.", ""]
+    conditions = list(dict.fromkeys(r["condition"] for r in rows))
+    for method in dict.fromkeys(r["method"] for r in rows):
+        mine = [r for r in rows if r["method"] == method]
+        for by in MARKDOWN_BY:
+            values = sorted({r["value"] for r in mine if r["by"] == by})
+            lines += [f"| {method}: {by} | " + " | ".join(conditions) + " |", "|---" * (len(conditions) + 1) + "|"]
+            for value in values:
+                cells = []
+                for condition in conditions:
+                    hits = [r for r in mine if r["by"] == by and r["value"] == value and r["condition"] == condition]
+                    k, n = sum(r["successes"] for r in hits), sum(r["episodes"] for r in hits)
+                    cells.append(f"{k}/{n}" if n else "")
+                lines.append(f"| {value} | " + " | ".join(cells) + " |")
+            lines.append("")
     return lines

@@ -137,13 +137,29 @@ def coverage(seeds: Sequence[int], n_envs: int) -> Coverage:
     return Coverage(n_envs, len(seeds), sum(v > 0 for v in visits), min(visits), max(visits))
 
 
-def check_coverage(episodes: int, n_envs: int, condition: str) -> None:
-    """Refuse an episode count that would weigh a condition's environments unequally."""
-    if episodes % n_envs:
-        raise ValueError(
-            f"{episodes} episodes cannot visit the {n_envs} environments of condition {condition!r} equally; "
-            f"use a multiple of {n_envs}"
-        )
+def reset_coverage(seeds: Sequence[int], n_envs: int, batch: int, condition: str) -> tuple[bool, str]:
+    """(certainly unequal?, message) for the seeds a vector env of ``batch`` envs was reset with.
+
+    ``lerobot-eval`` resets whole batches and scores only the first ``--eval.n_episodes`` episodes, so
+    with ``batch > 1`` the last batch may hold up to ``batch - 1`` unscored (padding) episodes: the
+    scored count is one of the last ``batch`` prefixes, and the message says so rather than claim a
+    coverage the scored episodes may not have.
+    """
+    seeds = list(seeds)
+    full = coverage(seeds, n_envs)
+    if batch <= 1:
+        return not full.equal, full.describe(condition)
+    prefixes = range(max(1, len(seeds) - batch + 1), len(seeds) + 1)
+    equal = [n for n in prefixes if coverage(seeds[:n], n_envs).equal]
+    if len(equal) == len(prefixes):
+        return False, full.describe(condition)
+    if not equal:
+        return True, full.describe(condition) + f" (whatever padding the last batch of {batch} held)"
+    return False, (
+        f"{condition}: {len(seeds)} episodes were reset in batches of {batch}; the scored ones visit its "
+        f"{n_envs} environments equally only if --eval.n_episodes is one of {', '.join(map(str, equal))} "
+        f"(a multiple of {n_envs})"
+    )
 
 
 class CoverageLog:
@@ -151,7 +167,7 @@ class CoverageLog:
 
     ``lerobot-eval`` resets every batch with explicit seeds; when the episodes do not visit the
     condition's environments equally (fewer episodes than environments, or not a multiple), this says
-    so in the log instead of silently weighing some environments more.
+    so in the log instead of silently weighing some environments more (:func:`reset_coverage`).
     """
 
     def setup_coverage(self, condition: str, n_envs: int) -> None:
@@ -167,9 +183,9 @@ class CoverageLog:
     def close(self, **kwargs):
         seeds = getattr(self, "_coverage_seeds", None)
         if seeds:
-            report = coverage(seeds, self._coverage_n_envs)
-            log = logger.info if report.equal else logger.warning
-            log("factorworld coverage: " + report.describe(self._coverage_condition))
+            batch = int(getattr(self, "num_envs", 1))
+            unequal, message = reset_coverage(seeds, self._coverage_n_envs, batch, self._coverage_condition)
+            (logger.warning if unequal else logger.info)("factorworld coverage: " + message)
             self._coverage_seeds = []
         return super().close(**kwargs)
 

@@ -17,13 +17,27 @@ from collections.abc import Mapping, Sequence
 Z95 = 1.959963984540054  # two-sided 95% normal quantile
 
 PAPER_FACTOR_RANKS: dict[str, float] = {
-    # Section 5.1 and Fig. 3a of the paper (sim, narrow ranges): camera position and object texture
-    # are hardest (tied), then table position and table texture (tied), then background (floor),
-    # then lighting and distractors (tied). Ties share the average rank; 1 = largest gap.
+    # Section 5.1 of the paper (sim, narrow ranges), with Fig. 3a's finer reading. The text states:
+    # table texture and camera position are harder than background, distractors and lighting;
+    # background is harder than distractors and lighting; object texture ~ camera position; table
+    # position ~ table texture. Ranking {camera position, object texture} above {table position, table
+    # texture} is our reading of Fig. 3a (the figure is not in the notes), not the text's: the report
+    # also gives the correlation with PAPER_FACTOR_RANKS_STATED. Ties share the average rank; 1 = largest gap.
     "camera_pos": 1.5,
     "object_texture": 1.5,
     "table_pos": 3.5,
     "table_texture": 3.5,
+    "floor_texture": 5.0,
+    "light": 6.5,
+    "distractors": 6.5,
+}
+PAPER_FACTOR_RANKS_STATED: dict[str, float] = {
+    # Only what section 5.1's text states: the four hard factors tied, then background, then lighting and
+    # distractors (tied).
+    "camera_pos": 2.5,
+    "object_texture": 2.5,
+    "table_pos": 2.5,
+    "table_texture": 2.5,
     "floor_texture": 5.0,
     "light": 6.5,
     "distractors": 6.5,
