@@ -9,7 +9,10 @@ checked here, before any work starts.
 from __future__ import annotations
 
 import itertools
+import json
 import logging
+import os
+import re
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -21,6 +24,68 @@ EXECUTORS = ("local", "ray")
 ALL_PAIRS = "all"
 RADIUS_FACTORS = ("camera_pos", "table_pos")
 RADII_M = {"narrow": 0.025, "medium": 0.05, "wide": 0.075}  # the paper's radii (appendix table)
+PATH_SUFFIXES = ("_path", "_root")  # settings named like this are local paths: resolved when the config is read
+WEIGHTS_SUFFIX = "weights_path"  # ... and these name weight files that must exist before a study starts
+DEVICE_PATTERN = re.compile(r"cpu|mps|cuda(:\d+)?")
+PICK_FAMILY = "pick"
+
+
+def is_path_setting(name: str) -> bool:
+    """A policy setting or ``lerobot-train`` flag that names a local file or folder."""
+    return name.endswith(PATH_SUFFIXES)
+
+
+def absolute_path(value: str) -> str:
+    """``value`` made absolute against the directory the command runs from (steps run elsewhere)."""
+    return os.path.abspath(os.path.expanduser(value))
+
+
+def resolve_policy_paths(policy: dict[str, Any]) -> dict[str, Any]:
+    """The policy settings with every path-like value (``*_path``, ``*_root``, nested too) made absolute."""
+    out: dict[str, Any] = {}
+    for name, value in policy.items():
+        if isinstance(value, dict):
+            out[name] = resolve_policy_paths(value)
+        elif isinstance(value, str) and value and is_path_setting(name):
+            out[name] = absolute_path(value)
+        else:
+            out[name] = value
+    return out
+
+
+def split_flag(arg: str) -> tuple[str, str] | None:
+    """``--a.b_path=x`` -> (``a.b_path``, ``x``); ``None`` for anything that is not ``--name=value``."""
+    if not arg.startswith("--") or "=" not in arg:
+        return None
+    name, _, value = arg[2:].partition("=")
+    return name, value
+
+
+def resolve_arg_paths(args: list[str]) -> list[str]:
+    """``lerobot-train`` flags with path-like values (``--x.y_path=...``, ``--x.y_root=...``) made absolute."""
+    out = []
+    for arg in args:
+        flag = split_flag(arg)
+        if flag and flag[1] and is_path_setting(flag[0]):
+            arg = f"--{flag[0]}={absolute_path(flag[1])}"
+        out.append(arg)
+    return out
+
+
+def policy_paths(policy: dict[str, Any], prefix: str = "") -> dict[str, str]:
+    """Dotted setting name -> path, for every path-like policy setting (nested too)."""
+    out: dict[str, str] = {}
+    for name, value in policy.items():
+        if isinstance(value, dict):
+            out.update(policy_paths(value, f"{prefix}{name}."))
+        elif isinstance(value, str) and value and is_path_setting(name):
+            out[prefix + name] = value
+    return out
+
+
+def check_device(setting: str, device: str) -> None:
+    if not DEVICE_PATTERN.fullmatch(str(device)):
+        raise ValueError(f"unknown {setting} {device!r}; valid: cpu, cuda, cuda:<index>, mps")
 
 
 @dataclass
@@ -38,6 +103,8 @@ class MethodConfig:
     def __post_init__(self) -> None:
         if "type" not in self.policy:
             raise ValueError(f"method {self.name!r} needs policy.type (a LeRobot policy type such as bc, rt1, act)")
+        # lerobot-train runs in the step's folder: a relative weights path must not depend on that
+        self.policy = resolve_policy_paths(self.policy)
 
 
 def check_policy(method: MethodConfig) -> None:
@@ -79,6 +146,8 @@ class CollectSettings:
         object_pos_width: Range of the per-episode object start (``narrow`` / ``medium``), for
             collection and evaluation alike.
         n_distractors: Distractor objects per environment.
+        n_objects: Objects on the table in a ``pick`` family scene (3 to 6; ``None``: the catalogue's
+            default); refused for other tasks.
         workers: Worker processes of one collection.
     """
 
@@ -91,10 +160,19 @@ class CollectSettings:
     max_episode_steps: int | None = None
     object_pos_width: str = "narrow"
     n_distractors: int = 1
+    n_objects: int | None = None
     workers: int = 1
 
     def demos_for(self, task: str) -> int:
         return int(self.demos_per_task.get(task, self.demos))
+
+    def n_objects_for(self, task: str) -> int | None:
+        """Objects per scene for a pick family task (the catalogue's default unless set); ``None`` otherwise."""
+        from ..factors.sampling import PICK_OBJECTS
+
+        if get_task(task).family != PICK_FAMILY:
+            return None
+        return PICK_OBJECTS[1] if self.n_objects is None else int(self.n_objects)
 
 
 @dataclass
@@ -107,7 +185,8 @@ class TrainSettings:
         batch_size: Batch size.
         threads: Torch CPU threads per training run (fixed so that results do not depend on the machine).
         device: ``cpu`` or ``cuda``.
-        extra_args: More ``lerobot-train`` flags, e.g. ``["--optimizer.lr=3e-4"]``.
+        extra_args: More ``lerobot-train`` flags, e.g. ``["--optimizer.lr=3e-4"]``; values of flags named
+            ``*_path`` / ``*_root`` are made absolute (training runs in the step's folder).
     """
 
     steps: int = 1000
@@ -116,6 +195,9 @@ class TrainSettings:
     threads: int = 1
     device: str = "cpu"
     extra_args: list[str] = field(default_factory=list)
+
+    def __post_init__(self) -> None:
+        self.extra_args = resolve_arg_paths(list(self.extra_args))
 
 
 @dataclass
@@ -127,14 +209,17 @@ class EvalSettings:
         episodes: Episodes per condition; a multiple of every N and of ``n_test_envs``.
         start_seed: Episode ``i`` is reset with ``start_seed + i`` in every condition (paired).
         max_episode_steps: Step limit of an episode (``None``: the task's horizon).
-        batch_size: Vectorised environments per evaluation (results do not depend on it).
-        threads: Torch CPU threads per evaluation.
+        device: Where the policy runs during evaluation (``cpu``, ``cuda``, ``cuda:<index>``, ``mps``);
+            in the step's key (GPU kernels need not give the CPU's actions bit for bit).
+        batch_size: Vectorised environments per evaluation (results do not depend on it: not in the key).
+        threads: Torch CPU threads per evaluation (not in the key).
     """
 
     n_test_envs: int = 10
     episodes: int = 20
     start_seed: int = 1000
     max_episode_steps: int | None = None
+    device: str = "cpu"
     batch_size: int = 1
     threads: int = 1
 
@@ -150,8 +235,9 @@ class StudyConfig:
         n_train_envs: The N values (training environments per dataset).
         seeds: Seeds; seed ``s`` samples the training and test environments and seeds training.
         train_factors: Factors varied across the training environments (the paper's seven).
-        factors: Single-factor conditions.
-        pairs: Pair conditions: ``[all]`` (every pair of ``factors``) or a list of ``a+b``.
+        factors: Single-factor conditions; for ``pick`` family tasks also the language conditions
+            ``held_out_phrasings`` and ``held_out_objects`` (they stand alone: no pairs, no training factor).
+        pairs: Pair conditions: ``[all]`` (every pair of the factors in ``factors``) or a list of ``a+b``.
         radius_factors: Factors of the radius sweep (``camera_pos``, ``table_pos``).
         radius_widths: Widths of the sweep: narrow / medium / wide = radius 0.025 / 0.05 / 0.075 m.
         methods: Methods (policy types and overrides).
@@ -189,9 +275,19 @@ class StudyConfig:
 
     # --- derived -----------------------------------------------------------------------------
 
+    def language_conditions(self) -> list[str]:
+        """The pick family's language conditions listed in ``factors`` (held-out phrasings / objects)."""
+        from ..pick.sampling import CONDITIONS
+
+        return [f for f in self.factors if f in CONDITIONS]
+
+    def shifted_factors(self) -> list[str]:
+        """The factors of ``factors`` (without the language conditions)."""
+        return [f for f in self.factors if f not in self.language_conditions()]
+
     def pair_conditions(self) -> list[str]:
         if [p.strip() for p in self.pairs] == [ALL_PAIRS]:
-            return [condition_name(p) for p in itertools.combinations(self.factors, 2)]
+            return [condition_name(p) for p in itertools.combinations(self.shifted_factors(), 2)]
         return [condition_name(parse_shift(p)) for p in self.pairs]
 
     def conditions(self) -> list[str]:
@@ -213,25 +309,8 @@ class StudyConfig:
     def validate(self) -> None:
         if not self.tasks or not self.n_train_envs or not self.seeds or not self.methods:
             raise ValueError("a study needs at least one task, one N (n_train_envs), one seed and one method")
-        for task in self.tasks:
-            spec = get_task(task)
-            check_task_support(spec, [*self.train_factors, *self.factors, *self.radius_factors])
-        for name in self.factors:
-            get_factor(name)
-        unknown = [f for f in self.factors if f not in self.train_factors]
-        if unknown:
-            raise ValueError(
-                f"factor(s) {unknown} are shifted but not varied in training (train_factors: {self.train_factors})"
-            )
-        pairs = self.pair_conditions()
-        for pair in pairs:
-            if any(f not in self.factors for f in pair.split(PAIR_SEPARATOR)):
-                raise ValueError(f"pair {pair!r} names a factor that is not in factors {self.factors}")
-        for method in self.methods:
-            check_policy(method)
-        names = [m.name for m in self.methods]
-        if len(set(names)) != len(names):
-            raise ValueError(f"method names must be distinct, got {names}")
+        self._validate_conditions()
+        self._validate_methods()
         for factor in self.radius_factors:
             if factor not in RADIUS_FACTORS:
                 raise ValueError(f"the radius sweep applies to {', '.join(RADIUS_FACTORS)}, got {factor!r}")
@@ -243,6 +322,9 @@ class StudyConfig:
             if width not in RADII_M:
                 raise ValueError(f"unknown radius width {width!r}; valid: {', '.join(RADII_M)}")
         get_factor("object_pos").range(self.collect.object_pos_width)  # raises naming the valid widths
+        self._validate_n_objects()
+        check_device("train.device", self.train.device)
+        check_device("eval.device", self.eval.device)
         if self.executor not in EXECUTORS:
             raise ValueError(f"unknown executor {self.executor!r}; valid executors: {', '.join(EXECUTORS)}")
         if self.workers < 1:
@@ -254,6 +336,89 @@ class StudyConfig:
         self._validate_episodes()
         if self.train.epochs is None and self.train.steps < 1:
             raise ValueError("train.steps must be at least 1 (or set train.epochs)")
+
+    def _validate_conditions(self) -> None:
+        """Factors apply to every task and are varied in training; language conditions need pick tasks."""
+        from ..pick.sampling import CONDITIONS, check_condition
+
+        duplicates = sorted({f for f in self.factors if self.factors.count(f) > 1})
+        if duplicates:
+            raise ValueError(f"factors lists {', '.join(duplicates)} more than once")
+        for condition in self.language_conditions():
+            check_condition(condition, self.tasks)  # "applies to the pick family only, not to door-open"
+        shifted = self.shifted_factors()
+        for task in self.tasks:
+            check_task_support(get_task(task), [*self.train_factors, *shifted, *self.radius_factors])
+        unknown = [f for f in shifted if f not in self.train_factors]
+        if unknown:
+            raise ValueError(
+                f"factor(s) {unknown} are shifted but not varied in training (train_factors: {self.train_factors})"
+            )
+        for pair in self.pairs:
+            named = [part.strip() for part in pair.split(PAIR_SEPARATOR)]
+            if any(part in CONDITIONS for part in named):
+                raise ValueError(
+                    f"pair {pair!r}: the language conditions {', '.join(CONDITIONS)} stand alone (list them in factors)"
+                )
+        for pair in self.pair_conditions():
+            if any(f not in shifted for f in pair.split(PAIR_SEPARATOR)):
+                raise ValueError(f"pair {pair!r} names a factor that is not in factors {shifted}")
+
+    def _validate_methods(self) -> None:
+        """Each method is a valid policy, named once, with settings no other method has (one train key each)."""
+        for method in self.methods:
+            check_policy(method)
+        names = [m.name for m in self.methods]
+        if len(set(names)) != len(names):
+            twice = sorted({n for n in names if names.count(n) > 1})
+            raise ValueError(f"method names must be distinct: {', '.join(twice)} given more than once")
+        seen: dict[str, str] = {}
+        for method in self.methods:
+            settings = json.dumps(method.policy, sort_keys=True)
+            if settings in seen:
+                raise ValueError(
+                    f"methods {seen[settings]!r} and {method.name!r} have the same policy settings {method.policy}: "
+                    "they would train one checkpoint; drop one or change its settings"
+                )
+            seen[settings] = method.name
+
+    def _validate_n_objects(self) -> None:
+        if self.collect.n_objects is None:
+            return
+        others = [t for t in self.tasks if get_task(t).family != PICK_FAMILY]
+        if others:
+            raise ValueError(
+                f"collect.n_objects applies to the pick family only (objects on the table), not to {', '.join(others)}"
+            )
+        from ..factors.sampling import PICK_OBJECTS
+
+        low, high = PICK_OBJECTS[0], PICK_OBJECTS[2]
+        if not low <= self.collect.n_objects <= high:
+            raise ValueError(f"collect.n_objects must be in [{low}, {high}], got {self.collect.n_objects}")
+
+    def missing_weight_files(self) -> list[str]:
+        """``method 'x': <setting> <path>`` for every weights file a method names that does not exist."""
+        from pathlib import Path
+
+        missing = []
+        for method in self.methods:
+            for name, path in policy_paths(method.policy).items():
+                if name.endswith(WEIGHTS_SUFFIX) and not Path(path).is_file():
+                    missing.append(f"method {method.name!r}: {name} {path}")
+        for arg in self.train.extra_args:
+            flag = split_flag(arg)
+            if flag and flag[0].endswith(WEIGHTS_SUFFIX) and not os.path.isfile(flag[1]):
+                missing.append(f"train.extra_args: {flag[0]} {flag[1]}")
+        return missing
+
+    def check_weight_files(self) -> None:
+        """Refuse to start when a weights file is missing (weights are never downloaded)."""
+        missing = self.missing_weight_files()
+        if missing:
+            raise FileNotFoundError(
+                f"weights file(s) not found: {'; '.join(missing)} (weights are never downloaded: put the files "
+                "there or fix the paths, relative to the directory you run from)"
+            )
 
     def _validate_episodes(self) -> None:
         ev = self.eval

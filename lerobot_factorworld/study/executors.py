@@ -8,6 +8,7 @@ machines the study folder must be on a filesystem they share (steps read their i
 from __future__ import annotations
 
 import concurrent.futures as cf
+from collections.abc import Sequence
 from multiprocessing import get_context
 from typing import Any, Protocol
 
@@ -47,9 +48,10 @@ class LocalExecutor:
 
 class RayExecutor:
     """Ray tasks on the cluster at ``address`` (or a local Ray instance when ``None``), each asking for the
-    CPUs (threads) and GPU its step uses."""
+    CPUs (threads, collection workers) and GPU its step uses. A request the cluster can never grant would
+    leave its task pending forever, so the steps are checked against the cluster before any is submitted."""
 
-    def __init__(self, study_dir: str, workers: int, address: str | None = None) -> None:
+    def __init__(self, study_dir: str, workers: int, address: str | None = None, steps: Sequence[Step] = ()) -> None:
         try:
             import ray
         except ImportError:
@@ -57,9 +59,15 @@ class RayExecutor:
         self.ray = ray
         self.study_dir = study_dir
         self._started = not ray.is_initialized()
+        requests = [step_resources(s) for s in steps]
         if self._started:
-            local = {"num_cpus": workers, "include_dashboard": False} if address is None else {}
+            local = {"num_cpus": local_cpus(workers, requests), "include_dashboard": False} if address is None else {}
             ray.init(address=address, log_to_driver=False, runtime_env={"env_vars": {"MUJOCO_GL": "egl"}}, **local)
+        try:
+            check_feasible(requests, ray.cluster_resources())
+        except ValueError:
+            self.shutdown()
+            raise
         self._run = ray.remote(num_cpus=1, max_retries=0)(run_step)
 
     def submit(self, step: Step):
@@ -75,16 +83,48 @@ class RayExecutor:
     def shutdown(self) -> None:
         if self._started:
             self.ray.shutdown()
+            self._started = False
 
 
 def step_resources(step: Step) -> dict[str, float]:
-    """Ray resources of a step: its threads (or collection workers) as CPUs, a GPU for CUDA training."""
-    cpus = step.inputs.get("threads") or step.meta.get("collect_workers") or 1
+    """Ray resources of a step: its threads (training, evaluation) or collection workers as CPUs, and a GPU
+    when it runs on CUDA (training with ``train.device``, evaluation with ``eval.device``)."""
+    cpus = step.inputs.get("threads") or step.run.get("threads") or step.run.get("workers") or 1
     gpus = 1 if str(step.inputs.get("device", "")).startswith("cuda") else 0
     return {"num_cpus": cpus, "num_gpus": gpus}
 
 
-def make_executor(kind: str, study_dir: str, workers: int, ray_address: str | None = None) -> Executor:
+def local_cpus(workers: int, requests: Sequence[dict[str, float]]) -> int:
+    """CPUs of a local Ray instance: ``workers`` steps at a time, and at least the largest request."""
+    return int(max([workers, *(r["num_cpus"] for r in requests)]))
+
+
+def check_feasible(requests: Sequence[dict[str, float]], cluster: dict[str, float]) -> None:
+    """Refuse requests beyond the whole cluster (Ray would keep such a task pending forever).
+
+    ``cluster`` is ``ray.cluster_resources()`` (totals: a multi-machine cluster may still not fit a large
+    request on one machine, which Ray then reports in its own log).
+    """
+    if not requests:
+        return
+    cpus, gpus = max(r["num_cpus"] for r in requests), max(r["num_gpus"] for r in requests)
+    have_cpus, have_gpus = cluster.get("CPU", 0), cluster.get("GPU", 0)
+    if cpus > have_cpus:
+        raise ValueError(
+            f"a step asks Ray for {cpus:g} CPUs (train.threads, eval.threads or collect.workers) but the cluster has "
+            f"{have_cpus:g}; lower those settings or give the cluster more CPUs"
+        )
+    if gpus > have_gpus:
+        raise ValueError(
+            f"a step asks Ray for a GPU (train.device or eval.device is cuda) but the cluster has {have_gpus:g}; "
+            "use --train.device=cpu --eval.device=cpu or a cluster with GPUs"
+        )
+
+
+def make_executor(
+    kind: str, study_dir: str, workers: int, ray_address: str | None = None, steps: Sequence[Step] = ()
+) -> Executor:
+    """The executor for ``steps`` (Ray checks them against its cluster before any runs)."""
     if kind == "ray":
-        return RayExecutor(study_dir, workers, ray_address)
+        return RayExecutor(study_dir, workers, ray_address, steps)
     return LocalExecutor(study_dir, workers)

@@ -1,17 +1,21 @@
 """The study grid as steps: one dataset per (task, N, seed, widths), one training run per method on it,
-one evaluation per condition of each checkpoint; and a rough cost model for ``--dry-run``."""
+one evaluation per condition of each checkpoint; and a rough cost model for ``--dry-run``.
+
+What goes into a step's inputs (hence its key) is what changes its results; see ``steps.py``."""
 
 from __future__ import annotations
 
 from collections import Counter
-from dataclasses import asdict, dataclass
+from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
+from ..datasets.version import DATA_VERSION
 from ..factors.registry import get_factor
 from ..tasks import get_task
 from .conditions import TRAIN_SUITE
-from .config import StudyConfig
-from .steps import Step, is_done
+from .config import StudyConfig, is_path_setting, split_flag
+from .steps import RUN, Step, file_fingerprint, is_done, versions
 
 DEFAULT_WIDTHS = "default"
 
@@ -45,20 +49,10 @@ def make_plan(cfg: StudyConfig) -> Plan:
                     collect = _collect_step(cfg, task, n, seed, widths, cell)
                     steps.setdefault(collect.key, collect)
                     for method in cfg.methods:
-                        train = Step(
-                            "train",
-                            {"policy": method.policy, "seed": seed, **_train_inputs(cfg)},
-                            (collect.key,),
-                            {"method": method.name, **cell},
-                        )
+                        train = _train_step(cfg, method.policy, seed, collect, {"method": method.name, **cell})
                         steps.setdefault(train.key, train)
                         for condition in [TRAIN_SUITE, *conditions]:
-                            ev = Step(
-                                "eval",
-                                {"condition": condition, **asdict(cfg.eval)},
-                                (train.key, collect.key),
-                                {"method": method.name, **cell, "condition": condition},
-                            )
+                            ev = _eval_step(cfg, condition, train, collect, {"method": method.name, **cell})
                             steps.setdefault(ev.key, ev)
     order = {"collect": 0, "train": 1, "eval": 2}
     return Plan(tuple(sorted(steps.values(), key=lambda s: order[s.kind])))
@@ -70,7 +64,7 @@ def _collect_step(cfg: StudyConfig, task: str, n: int, seed: int, widths: dict[s
         "task": task,
         "n_envs": n,
         "seed": seed,
-        "train_factors": list(cfg.train_factors),
+        "train_factors": sorted(cfg.train_factors),  # each factor has its own RNG: the order changes nothing
         "demos": c.demos_for(task),
         "cameras": c.cameras,
         "image_size": c.image_size,
@@ -79,20 +73,78 @@ def _collect_step(cfg: StudyConfig, task: str, n: int, seed: int, widths: dict[s
         "max_episode_steps": c.max_episode_steps,
         "n_distractors": c.n_distractors,
         "widths": {"object_pos": c.object_pos_width, **widths},
+        "data_version": DATA_VERSION,
+        "versions": versions(),
     }
-    return Step("collect", inputs, (), {**cell, "collect_workers": c.workers})
+    n_objects = c.n_objects_for(task)
+    if n_objects is not None:  # pick family: objects per scene
+        inputs["n_objects"] = n_objects
+    return Step("collect", inputs, (), {**cell, RUN: {"workers": c.workers}})
 
 
-def _train_inputs(cfg: StudyConfig) -> dict:
+def _train_step(cfg: StudyConfig, policy: dict[str, Any], seed: int, collect: Step, labels: dict) -> Step:
+    """Training of one method on one dataset; weight files enter the key by content, not by location."""
     t = cfg.train
-    return {
+    inputs = {
+        "policy": keyed_policy(policy),
+        "seed": seed,
         "steps": t.steps if t.epochs is None else None,
         "epochs": t.epochs,
         "batch_size": t.batch_size,
         "threads": t.threads,
         "device": t.device,
-        "extra_args": list(t.extra_args),
+        "extra_args": keyed_args(t.extra_args),
+        "versions": versions(),
     }
+    run = {"policy": policy, "extra_args": list(t.extra_args)}
+    return Step("train", inputs, (collect.key,), {**labels, RUN: run})
+
+
+def _eval_step(cfg: StudyConfig, condition: str, train: Step, collect: Step, labels: dict) -> Step:
+    """One condition of one checkpoint; batch size and threads do not change results (kept out of the key),
+    and ``train`` (the dataset's own environments) does not depend on ``n_test_envs``."""
+    ev = cfg.eval
+    inputs = {
+        "condition": condition,
+        "episodes": ev.episodes,
+        "start_seed": ev.start_seed,
+        "max_episode_steps": ev.max_episode_steps,
+        "device": ev.device,
+        "versions": versions(),
+    }
+    if condition != TRAIN_SUITE:
+        inputs["n_test_envs"] = ev.n_test_envs
+    run = {"batch_size": ev.batch_size, "threads": ev.threads}
+    return Step("eval", inputs, (train.key, collect.key), {**labels, "condition": condition, RUN: run})
+
+
+def _keyed_path(value: str) -> str:
+    """A path setting as the key sees it: an existing file by its content hash, anything else as given."""
+    return file_fingerprint(value) or value
+
+
+def keyed_policy(policy: dict[str, Any]) -> dict[str, Any]:
+    """Policy settings for the key: every path-like setting naming a file replaced by its content hash."""
+    out: dict[str, Any] = {}
+    for name, value in policy.items():
+        if isinstance(value, dict):
+            out[name] = keyed_policy(value)
+        elif isinstance(value, str) and value and is_path_setting(name):
+            out[name] = _keyed_path(value)
+        else:
+            out[name] = value
+    return out
+
+
+def keyed_args(args: list[str]) -> list[str]:
+    """``lerobot-train`` flags for the key: path-like values naming a file replaced by its content hash."""
+    out = []
+    for arg in args:
+        flag = split_flag(arg)
+        if flag and flag[1] and is_path_setting(flag[0]):
+            arg = f"--{flag[0]}={_keyed_path(flag[1])}"
+        out.append(arg)
+    return out
 
 
 # --- cost model ---------------------------------------------------------------------------------
@@ -104,7 +156,13 @@ TRAIN_SAMPLE_S = {
     "rt1": 0.02,
     "bc": 0.006,
     "act": 0.01,
-}  # seconds per training sample on one CPU core (bc: 1 thread, batch 32)
+}  # seconds per training sample on one CPU core (bc: 1 thread, batch 32; the conv encoder and head)
+# A frozen pretrained encoder of bc adds one backbone pass per image it has not cached (training) or sees
+# (evaluation). Measured 2026-11-23 on the 2-core machine: forward of the randomly initialised backbone,
+# its own resizing to 224 px included, batch 8 of 84 px images, one thread, no gradient, best of 3 rounds;
+# other jobs shared the machine (load average 4.3), so these may be up to 2x high.
+ENCODER_FRAME_S = {"lite0": 0.032, "r3m_rn50": 0.086, "clip_rn50": 0.115}
+FEATURE_CACHE_FRAMES = 100_000  # bc's default feature_cache_size (frames whose frozen features are kept)
 GPU_TRAIN_SPEEDUP = 30.0  # one datacentre GPU vs one CPU core for these small image policies
 EVAL_EPISODE_FRACTION = 0.6  # mean episode length / horizon (successes end early, failures run to the limit)
 PROFILES = {
@@ -116,37 +174,80 @@ PROFILES = {
 
 
 def expert_episode_steps(task: str) -> int:
-    """Typical scripted-demo length (measured: pick-place ~50, door-open ~85, bin-picking ~120 steps)."""
-    return {"pick-place": 50, "door-open": 85, "bin-picking": 120, "handle-press": 30}.get(task, 100)
+    """Typical scripted-demo length (measured: pick-place ~50, door-open ~85, pick ~85, bin-picking ~120 steps)."""
+    return {"pick-place": 50, "door-open": 85, "pick": 85, "bin-picking": 120, "handle-press": 30}.get(task, 100)
+
+
+def cameras_of(collect: Step) -> int:
+    return len([c for c in str(collect.inputs["cameras"]).split(",") if c.strip()])
+
+
+def frozen_encoder(policy: dict[str, Any]) -> str | None:
+    """The frozen pretrained encoder of a ``bc`` policy (``lite0``, ``r3m_rn50``, ``clip_rn50``), if any."""
+    encoder = policy.get("encoder", "conv") if policy.get("type") == "bc" else None
+    return encoder if encoder in ENCODER_FRAME_S else None
+
+
+def encoder_runs(policy: dict[str, Any], frames: int, samples: float) -> float:
+    """Backbone passes of a training run: with ``augmentation: none`` the feature cache computes each frame
+    once while it holds them all (an LRU of ``feature_cache_size`` frames otherwise hits cache/frames of
+    the draws); with augmentation every sample is new pixels."""
+    cache = int(policy.get("feature_cache_size", FEATURE_CACHE_FRAMES))
+    if policy.get("augmentation", "none") != "none" or cache == 0 or samples <= min(frames, cache):
+        return samples
+    if frames <= cache:
+        return frames
+    return cache + (samples - cache) * (1 - cache / frames)
 
 
 def step_cost(step: Step, plan_index: dict[str, Step]) -> tuple[float, float]:
-    """(CPU seconds, GPU-able training samples) of one step."""
+    """(CPU seconds, seconds on one CPU core of work a GPU takes over) of one step.
+
+    The second part is training, and evaluation's frozen encoder when ``eval.device`` is a GPU.
+    """
     if step.kind == "collect":
         frames = step.inputs["demos"] * expert_episode_steps(step.inputs["task"])
         return STEP_OVERHEAD_S["collect"] + frames * COLLECT_FRAME_S, 0.0
     collect = plan_index[step.deps[-1]]
     if step.kind == "train":
-        frames = collect.inputs["demos"] * expert_episode_steps(collect.inputs["task"])
-        steps = step.inputs["steps"] or step.inputs["epochs"] * frames / step.inputs["batch_size"]
-        return STEP_OVERHEAD_S["train"], steps * step.inputs["batch_size"]
+        return STEP_OVERHEAD_S["train"], _train_seconds(step, collect)
+    return _eval_cost(step, plan_index[step.deps[0]], collect)
+
+
+def _train_seconds(step: Step, collect: Step) -> float:
+    frames = collect.inputs["demos"] * expert_episode_steps(collect.inputs["task"])
+    steps = step.inputs["steps"] or step.inputs["epochs"] * frames / step.inputs["batch_size"]
+    samples = steps * step.inputs["batch_size"]
+    policy = step.inputs["policy"]
+    seconds = samples * TRAIN_SAMPLE_S.get(policy["type"], 0.02)
+    encoder = frozen_encoder(policy)
+    if encoder:
+        seconds += encoder_runs(policy, frames, samples) * cameras_of(collect) * ENCODER_FRAME_S[encoder]
+    return seconds
+
+
+def _eval_cost(step: Step, train: Step, collect: Step) -> tuple[float, float]:
     horizon = step.inputs["max_episode_steps"] or get_task(collect.inputs["task"]).max_episode_steps
-    return STEP_OVERHEAD_S["eval"] + step.inputs["episodes"] * horizon * EVAL_EPISODE_FRACTION * SIM_STEP_S, 0.0
+    sim_steps = step.inputs["episodes"] * horizon * EVAL_EPISODE_FRACTION
+    cpu_s = STEP_OVERHEAD_S["eval"] + sim_steps * SIM_STEP_S
+    encoder = frozen_encoder(train.inputs["policy"])
+    encoder_s = sim_steps * cameras_of(collect) * ENCODER_FRAME_S[encoder] if encoder else 0.0
+    if str(step.inputs.get("device", "cpu")).startswith("cuda"):
+        return cpu_s, encoder_s
+    return cpu_s + encoder_s, 0.0
 
 
 def estimate(plan: Plan, steps: list[Step]) -> dict[str, float]:
     """Wall-clock hours of ``steps`` under each profile (CPU work spread over slots; training on GPU where there is one)."""
     index = {s.key: s for s in plan.steps}
-    cpu_s, train_samples_s = 0.0, 0.0
+    cpu_s, gpu_able_s = 0.0, 0.0
     for step in steps:
-        seconds, samples = step_cost(step, index)
+        seconds, accelerated = step_cost(step, index)
         cpu_s += seconds
-        if samples:
-            policy = index[step.key].inputs["policy"]["type"]
-            train_samples_s += samples * TRAIN_SAMPLE_S.get(policy, 0.02)
+        gpu_able_s += accelerated
     out = {}
     for name, (slots, gpus, speed) in PROFILES.items():
-        train_s = train_samples_s / GPU_TRAIN_SPEEDUP / gpus if gpus else train_samples_s / slots
+        train_s = gpu_able_s / GPU_TRAIN_SPEEDUP / gpus if gpus else gpu_able_s / slots
         out[name] = (cpu_s / slots / speed + train_s) / 3600
     return out
 
@@ -161,12 +262,16 @@ def describe(cfg: StudyConfig, plan: Plan) -> str:
         lines.append(f"  {kind:8s} {total:6d} steps, {cached:6d} cached, {total - cached:6d} to run")
     lines.append(
         f"  grid: {len(cfg.methods)} method(s) x {len(cfg.tasks)} task(s) x N {cfg.n_train_envs} x {len(cfg.seeds)} seed(s); "
-        f"conditions: train + {len(cfg.factors)} factors + {len(cfg.pair_conditions())} pairs; "
-        f"radius runs: {len(cfg.radius_variants())}"
+        f"conditions: train + {len(cfg.shifted_factors())} factors + {len(cfg.pair_conditions())} pairs"
+        + (f" + {len(cfg.language_conditions())} language" if cfg.language_conditions() else "")
+        + f"; radius runs: {len(cfg.radius_variants())}"
     )
     lines.append("  estimated wall time of the steps to run (rough model in study/plan.py):")
     for name, hours in estimate(plan, todo).items():
         lines.append(f"    {name:40s} {hours:10.1f} h" if hours >= 1 else f"    {name:40s} {hours * 60:10.0f} min")
+    missing = cfg.missing_weight_files()
+    if missing:
+        lines.append(f"  not startable yet, weights file(s) not found: {'; '.join(missing)}")
     return "\n".join(lines)
 
 

@@ -44,6 +44,7 @@ def run_study(cfg: StudyConfig, command: str | None = None) -> StudyOutcome | st
     study_dir = Path(cfg.out_dir)
     if cfg.dry_run:
         return describe(cfg, plan)
+    cfg.check_weight_files()  # before any step runs: weights are never downloaded
     study_dir.mkdir(parents=True, exist_ok=True)
     command = command or "factorworld study " + " ".join(shlex.quote(a) for a in sys.argv[2:])
     with _lock(study_dir):
@@ -65,6 +66,7 @@ def _execute(cfg: StudyConfig, plan: Plan, study_dir: Path) -> StudyOutcome:
         outcome.ran[kind] = 0
     if not todo:
         return outcome
+    executor = make_executor(cfg.executor, str(study_dir.resolve()), cfg.workers, cfg.ray_address, todo)
     bars = {
         kind: tqdm(total=sum(1 for s in todo if s.kind == kind), desc=f"{kind:7s}", unit="step", position=i)
         for i, kind in enumerate(k for k in KINDS if any(s.kind == k for s in todo))
@@ -73,7 +75,6 @@ def _execute(cfg: StudyConfig, plan: Plan, study_dir: Path) -> StudyOutcome:
     failed: set[str] = set()
     pending = list(todo)
     running: dict = {}
-    executor = make_executor(cfg.executor, str(study_dir.resolve()), cfg.workers, cfg.ray_address)
     try:
         while pending or running:
             for step in _blocked(pending, failed):

@@ -2,14 +2,19 @@
 ``eval_policy_all`` on the ``factorworld`` env, as ``lerobot-eval`` does).
 
 A step's key hashes its kind, its inputs and the keys of the steps it depends on, so a change to one
-setting changes the keys of exactly the steps that depend on it. Each step works in
-``<study>/steps/<kind>/<key>/`` and counts as done only once its ``result.json`` is written
-(atomically, last): an interrupted step is redone, a finished one is never redone.
+setting changes the keys of exactly the steps that depend on it. Inputs hold what changes results
+(settings, the versions of the packages that compute them, the dataset format, weight files' content);
+settings documented not to change results (workers, evaluation batch size and threads, where a weights
+file lies) travel in ``meta["run"]`` instead. Each step works in ``<study>/steps/<kind>/<key>/`` and
+counts as done only once its ``result.json`` is written (atomically, last): an interrupted step is
+redone, a finished one is never redone. Results name their files relative to the study folder, so a
+moved study folder still resumes.
 """
 
 from __future__ import annotations
 
 import contextlib
+import functools
 import hashlib
 import json
 import math
@@ -19,17 +24,60 @@ import subprocess
 import sys
 import time
 from dataclasses import dataclass, field
+from importlib import metadata
 from pathlib import Path
 from typing import Any
 
 KINDS = ("collect", "train", "eval")
-STEP_FORMAT = 1  # bump when a step's meaning changes: every key changes with it
+STEP_FORMAT = 2  # bump when a step's meaning changes: every key changes with it (2: versions, content hashes)
 RESULT_FILE = "result.json"
 INPUTS_FILE = "step.json"
 LOG_FILE = "log.txt"
 DATA_DIR = "data"
 TRAIN_DIR = "train"
 CHECKPOINT = "checkpoints/last/pretrained_model"
+RUN = "run"  # meta entry: how to run a step, without changing its results (not in the key, not in labels)
+RESULT_PATHS = ("root", "checkpoint")  # result entries that name files: stored relative to the study folder
+DISTRIBUTION = "lerobot_env_factorworld"
+VERSIONED = ("lerobot", "torch", "mujoco", "metaworld")  # packages whose version changes what a step computes
+
+
+@functools.cache
+def versions() -> dict[str, str]:
+    """The versions in every step's key: this project's and those of the packages that compute results.
+
+    A code change without a version bump is not detected (bump ``STEP_FORMAT`` or the package version).
+    """
+    from .. import __version__
+
+    out = {"lerobot_factorworld": _version(DISTRIBUTION, __version__)}
+    out.update({name: _version(name, "unknown") for name in VERSIONED})
+    return out
+
+
+def _version(distribution: str, default: str) -> str:
+    try:
+        return metadata.version(distribution)
+    except metadata.PackageNotFoundError:
+        return default
+
+
+@functools.cache
+def _sha256(path: str, size: int, mtime_ns: int) -> str:
+    digest = hashlib.sha256()
+    with open(path, "rb") as f:
+        for block in iter(lambda: f.read(1 << 20), b""):
+            digest.update(block)
+    return digest.hexdigest()
+
+
+def file_fingerprint(path: str | Path) -> str | None:
+    """``sha256:<hex>`` of a file's content (cached per size and mtime), ``None`` when it is not a file."""
+    path = Path(path)
+    if not path.is_file():
+        return None
+    stat = path.stat()
+    return "sha256:" + _sha256(str(path.resolve()), stat.st_size, stat.st_mtime_ns)
 
 
 @dataclass(frozen=True)
@@ -48,7 +96,12 @@ class Step:
 
     @property
     def label(self) -> str:
-        return f"{self.kind} " + " ".join(f"{k}={v}" for k, v in self.meta.items())
+        return f"{self.kind} " + " ".join(f"{k}={v}" for k, v in self.meta.items() if k != RUN)
+
+    @property
+    def run(self) -> dict[str, Any]:
+        """How to run this step (worker count, batch size, threads, paths): never changes its results."""
+        return self.meta.get(RUN, {})
 
     def folder(self, study_dir: str | Path) -> Path:
         return Path(study_dir) / "steps" / self.kind / self.key
@@ -66,8 +119,37 @@ def is_done(step: Step, study_dir: str | Path) -> bool:
 
 
 def read_result(step_or_folder: Step | Path, study_dir: str | Path | None = None) -> dict[str, Any]:
-    folder = step_or_folder.folder(study_dir) if isinstance(step_or_folder, Step) else step_or_folder
-    return json.loads((folder / RESULT_FILE).read_text())
+    """A step's result, its paths (``root``, ``checkpoint``) absolute under the study folder it is in now."""
+    folder = step_or_folder.folder(study_dir) if isinstance(step_or_folder, Step) else Path(step_or_folder)
+    result = json.loads((folder / RESULT_FILE).read_text())
+    base = folder.parents[2]  # <study>/steps/<kind>/<key>
+    return {k: str(_absolute(v, base)) if k in RESULT_PATHS and v else v for k, v in result.items()}
+
+
+def _absolute(value: str, study_dir: Path) -> Path:
+    """A stored path made absolute: relative ones (this format) are under ``study_dir``; an absolute one
+    (older results) is re-rooted there when the study folder has moved since."""
+    path = Path(value)
+    if not path.is_absolute():
+        return study_dir / path
+    if path.exists():
+        return path
+    parts = path.parts
+    for i in range(len(parts) - 2, -1, -1):
+        if parts[i] == "steps" and parts[i + 1] in KINDS:
+            return study_dir.joinpath(*parts[i:])
+    return path
+
+
+def _portable(result: dict[str, Any], study_dir: Path) -> dict[str, Any]:
+    """The result with its paths relative to the study folder (where they lie inside it)."""
+    out = dict(result)
+    for key in RESULT_PATHS:
+        if out.get(key):
+            path = Path(out[key])
+            with contextlib.suppress(ValueError):
+                out[key] = path.resolve().relative_to(study_dir.resolve()).as_posix()
+    return out
 
 
 def run_step(step_data: dict[str, Any], study_dir: str) -> dict[str, Any]:
@@ -86,7 +168,8 @@ def run_step(step_data: dict[str, Any], study_dir: str) -> dict[str, Any]:
     with _output_to(folder / LOG_FILE):  # progress bars of collection and evaluation go to the step's log
         result = RUNNERS[step.kind](step, folder, deps)
     result["seconds"] = round(time.perf_counter() - start, 2)
-    _atomic_write(folder / RESULT_FILE, json.dumps(result, indent=1, sort_keys=True))
+    stored = _portable(result, Path(study_dir))
+    _atomic_write(folder / RESULT_FILE, json.dumps(stored, indent=1, sort_keys=True))
     return result
 
 
@@ -129,6 +212,8 @@ def collect_config(inputs: dict[str, Any], root: Path, key: str, workers: int = 
     from ..datasets.collect import CollectConfig
     from ..factors.sampling import SamplingOptions
 
+    n_objects = {} if inputs.get("n_objects") is None else {"n_objects": int(inputs["n_objects"])}  # pick family
+    sampling = SamplingOptions(widths=dict(inputs["widths"]), n_distractors=inputs["n_distractors"], **n_objects)
     return CollectConfig(
         task=inputs["task"],
         factors=list(inputs["train_factors"]),
@@ -144,7 +229,7 @@ def collect_config(inputs: dict[str, Any], root: Path, key: str, workers: int = 
         repo_id=f"local/factorworld_{key}",
         workers=workers,
         mode="new",
-        sampling=SamplingOptions(widths=dict(inputs["widths"]), n_distractors=inputs["n_distractors"]),
+        sampling=sampling,
     )
 
 
@@ -152,7 +237,7 @@ def _run_collect(step: Step, folder: Path, deps: list[Path]) -> dict[str, Any]:
     from ..datasets.collect import SIDECAR, collect
 
     root = folder / DATA_DIR
-    cfg = collect_config(step.inputs, root, step.key, step.meta.get("collect_workers", 1))
+    cfg = collect_config(step.inputs, root, step.key, step.run.get("workers", 1))
     if (root / SIDECAR).is_file():  # merged before an interruption: nothing left to do
         from lerobot.datasets.lerobot_dataset import LeRobotDatasetMetadata
 
@@ -199,6 +284,8 @@ def train_steps(inputs: dict[str, Any], frames: int) -> int:
 def _run_train(step: Step, folder: Path, deps: list[Path]) -> dict[str, Any]:
     data = read_result(_dep_of_kind(deps, "collect"))
     inputs = step.inputs
+    policy = step.run.get("policy", inputs["policy"])  # absolute paths; the key holds their content hashes
+    extra_args = step.run.get("extra_args", inputs["extra_args"])
     steps = train_steps(inputs, data["frames"])
     out = folder / TRAIN_DIR
     if out.exists():  # an interrupted run: LeRobot refuses an existing output_dir, start over
@@ -207,7 +294,7 @@ def _run_train(step: Step, folder: Path, deps: list[Path]) -> dict[str, Any]:
         sys.executable,
         "-m",
         "lerobot.scripts.lerobot_train",
-        *policy_args(inputs["policy"]),
+        *policy_args(policy),
         f"--policy.device={inputs['device']}",
         "--policy.push_to_hub=false",
         f"--dataset.repo_id={data['repo_id']}",
@@ -220,7 +307,7 @@ def _run_train(step: Step, folder: Path, deps: list[Path]) -> dict[str, Any]:
         f"--log_freq={max(1, steps // 10)}",
         "--wandb.enable=false",
         f"--output_dir={out}",
-        *inputs["extra_args"],
+        *extra_args,
     ]
     threads = str(inputs["threads"])
     env = {**os.environ, "OMP_NUM_THREADS": threads, "MKL_NUM_THREADS": threads, "TOKENIZERS_PARALLELISM": "false"}
@@ -247,6 +334,7 @@ def eval_env_config(collect_inputs: dict[str, Any], data_root: str, inputs: dict
 
     condition = inputs["condition"]
     is_train = condition == TRAIN_SUITE
+    n_test_envs = {} if is_train else {"n_test_envs": inputs["n_test_envs"]}  # train: the dataset's own
     return FactorWorldEnvConfig(
         task=collect_inputs["task"],
         cameras=collect_inputs["cameras"],
@@ -255,7 +343,7 @@ def eval_env_config(collect_inputs: dict[str, Any], data_root: str, inputs: dict
         dataset_root=data_root,
         shifts=[] if is_train else [condition],
         include_train=is_train,
-        n_test_envs=inputs["n_test_envs"],
+        **n_test_envs,
     )
 
 
@@ -273,8 +361,8 @@ def _run_eval(step: Step, folder: Path, deps: list[Path]) -> dict[str, Any]:
 
     register_third_party_plugins()  # as lerobot-eval does: Factor World's env and policy types, and any other plugin
 
-    inputs = step.inputs
-    torch.set_num_threads(inputs["threads"])
+    inputs, run = step.inputs, step.run
+    torch.set_num_threads(run.get("threads", 1))
     collect_folder = _dep_of_kind(deps, "collect")
     collect_inputs = json.loads((collect_folder / INPUTS_FILE).read_text())["inputs"]
     data = read_result(collect_folder)
@@ -285,7 +373,7 @@ def _run_eval(step: Step, folder: Path, deps: list[Path]) -> dict[str, Any]:
 
     policy_cfg = PreTrainedConfig.from_pretrained(checkpoint)
     policy_cfg.pretrained_path = Path(checkpoint)
-    policy_cfg.device = "cpu" if not torch.cuda.is_available() else policy_cfg.device
+    policy_cfg.device = _eval_device(inputs.get("device", "cpu"))
     set_seed(inputs["start_seed"])
     policy = make_policy(cfg=policy_cfg, env_cfg=env_cfg)
     preprocessor, postprocessor = make_pre_post_processors(
@@ -294,7 +382,7 @@ def _run_eval(step: Step, folder: Path, deps: list[Path]) -> dict[str, Any]:
         preprocessor_overrides={"device_processor": {"device": str(policy_cfg.device)}},
     )
     env_pre, env_post = make_env_pre_post_processors(env_cfg=env_cfg, policy_cfg=policy_cfg)
-    envs = make_env(env_cfg, n_envs=inputs["batch_size"], use_async_envs=False)
+    envs = make_env(env_cfg, n_envs=run.get("batch_size", 1), use_async_envs=False)
     with torch.no_grad():
         info = eval_policy_all(
             envs,
@@ -322,6 +410,17 @@ def _run_eval(step: Step, folder: Path, deps: list[Path]) -> dict[str, Any]:
         # pick family: what every episode asked for (instruction, named object), for per-object breakdowns
         "pick": episode_records(configs, seeds, env_cfg.sampling.widths.get("object_pos")),
     }
+
+
+def _eval_device(device: str) -> str:
+    """``eval.device``, refused when this machine lacks it (rather than silently running elsewhere)."""
+    import torch
+
+    if device.startswith("cuda") and not torch.cuda.is_available():
+        raise RuntimeError(f"eval.device={device} but this machine has no CUDA device; use --eval.device=cpu")
+    if device == "mps" and not torch.backends.mps.is_available():
+        raise RuntimeError("eval.device=mps but this machine has no MPS device; use --eval.device=cpu")
+    return device
 
 
 RUNNERS = {"collect": _run_collect, "train": _run_train, "eval": _run_eval}

@@ -1,0 +1,272 @@
+"""The study's step keys, paths, executors' resource checks and settings (fast: no step is really run)."""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import shutil
+from dataclasses import replace
+from pathlib import Path
+
+import pytest
+
+from lerobot_factorworld.study.config import StudyConfig
+from lerobot_factorworld.study.plan import make_plan
+
+ROOT = Path(__file__).resolve().parents[1]
+BC = {"name": "bc", "policy": {"type": "bc"}}
+
+
+def _cfg(**overrides) -> StudyConfig:
+    settings = {
+        "tasks": ["door-open"],
+        "n_train_envs": [1, 2],
+        "train_factors": ["light", "table_texture", "camera_pos"],
+        "factors": ["light", "table_texture"],
+        "methods": [BC],
+        "collect": {"demos": 2},
+        "eval": {"n_test_envs": 2, "episodes": 2},
+    }
+    settings.update(overrides)
+    from lerobot_factorworld.study.config import CollectSettings, EvalSettings, TrainSettings
+
+    for name, cls in (("collect", CollectSettings), ("train", TrainSettings), ("eval", EvalSettings)):
+        if isinstance(settings.get(name), dict):
+            settings[name] = cls(**settings[name])
+    return StudyConfig(**settings)
+
+
+def _keys(cfg: StudyConfig, kind: str) -> set[str]:
+    return {s.key for s in make_plan(cfg).of_kind(kind)}
+
+
+def _eval_keys(cfg: StudyConfig) -> dict[tuple, str]:
+    return {(s.meta["n_train_envs"], s.meta["condition"]): s.key for s in make_plan(cfg).of_kind("eval")}
+
+
+# --- 1. what is in a key ------------------------------------------------------------------------
+
+
+def test_collect_key_holds_the_data_version_and_package_versions_not_the_factor_order(monkeypatch):
+    from lerobot_factorworld.datasets.version import DATA_VERSION
+    from lerobot_factorworld.study import plan as plan_module
+
+    cfg = _cfg()
+    collect = make_plan(cfg).of_kind("collect")[0]
+    assert collect.inputs["data_version"] == DATA_VERSION
+    assert {"lerobot_factorworld", "lerobot"} <= set(collect.inputs["versions"])
+    reordered = _cfg(train_factors=["camera_pos", "table_texture", "light"])
+    assert _keys(reordered, "collect") == _keys(cfg, "collect")
+    every = {kind: _keys(cfg, kind) for kind in ("collect", "train", "eval")}
+    monkeypatch.setattr(plan_module, "DATA_VERSION", DATA_VERSION + 1)
+    assert not _keys(cfg, "collect") & every["collect"] and not _keys(cfg, "eval") & every["eval"]
+    monkeypatch.undo()
+    monkeypatch.setattr(plan_module, "versions", lambda: {"lerobot_factorworld": "9.9", "lerobot": "0.6.1"})
+    for kind, keys in every.items():
+        assert not _keys(cfg, kind) & keys, kind
+
+
+def test_eval_key_ignores_batch_size_and_threads_and_train_ignores_n_test_envs():
+    cfg = _cfg()
+    keys = _eval_keys(cfg)
+    faster = replace(cfg, eval=replace(cfg.eval, batch_size=2, threads=2))
+    assert _eval_keys(faster) == keys
+    step = next(s for s in make_plan(faster).of_kind("eval"))
+    assert step.run == {"batch_size": 2, "threads": 2} and "threads" not in step.label
+    four = _cfg(eval={"n_test_envs": 2, "episodes": 4})
+    keys = _eval_keys(four)
+    changed = _eval_keys(replace(four, eval=replace(four.eval, n_test_envs=4)))
+    assert changed[(1, "train")] == keys[(1, "train")] and changed[(2, "train")] == keys[(2, "train")]
+    assert changed[(1, "light")] != keys[(1, "light")] and changed[(2, "table_texture")] != keys[(2, "table_texture")]
+    assert _eval_keys(cfg)[(1, "train")] != keys[(1, "train")]  # other episodes: another evaluation
+
+
+def test_eval_device_is_a_setting_in_the_eval_key_only():
+    cfg = _cfg()
+    assert cfg.eval.device == "cpu"
+    assert all(s.inputs["device"] == "cpu" for s in make_plan(cfg).of_kind("eval"))
+    on_gpu = replace(cfg, eval=replace(cfg.eval, device="cuda"))
+    assert _keys(on_gpu, "train") == _keys(cfg, "train")
+    assert not _keys(on_gpu, "eval") & _keys(cfg, "eval")
+    with pytest.raises(ValueError, match="unknown eval.device 'gpu'; valid: cpu, cuda"):
+        replace(cfg, eval=replace(cfg.eval, device="gpu"))
+
+
+# --- 2. paths -----------------------------------------------------------------------------------
+
+
+def _r3m(path: str, name: str = "r3m") -> dict:
+    return {"name": name, "policy": {"type": "bc", "encoder": "r3m_rn50", "encoder_weights_path": path}}
+
+
+def test_relative_weights_path_is_resolved_and_keyed_by_its_content(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "weights").mkdir()
+    (tmp_path / "weights" / "r3m.pt").write_bytes(b"one")
+    cfg = _cfg(methods=[_r3m("weights/r3m.pt")], train={"extra_args": ["--x.y_root=data", "--optimizer.lr=1e-3"]})
+    assert cfg.methods[0].policy["encoder_weights_path"] == str(tmp_path / "weights" / "r3m.pt")
+    assert cfg.train.extra_args == [f"--x.y_root={tmp_path / 'data'}", "--optimizer.lr=1e-3"]
+    train = make_plan(cfg).of_kind("train")[0]
+    assert train.run["policy"]["encoder_weights_path"] == str(tmp_path / "weights" / "r3m.pt")
+    sha = hashlib.sha256(b"one").hexdigest()
+    assert train.inputs["policy"]["encoder_weights_path"] == f"sha256:{sha}"
+    keys = _keys(cfg, "train")
+    (tmp_path / "elsewhere").mkdir()
+    shutil.copy(tmp_path / "weights" / "r3m.pt", tmp_path / "elsewhere" / "r3m.pt")
+    moved = _cfg(methods=[_r3m(str(tmp_path / "elsewhere" / "r3m.pt"))], train=cfg.train)
+    assert _keys(moved, "train") == keys  # the same content elsewhere: the same checkpoints
+    (tmp_path / "weights" / "r3m.pt").write_bytes(b"two")
+    assert not _keys(_cfg(methods=[_r3m("weights/r3m.pt")], train=cfg.train), "train") & keys
+
+
+def test_missing_weights_file_is_refused_before_any_step_runs(tmp_path, monkeypatch, capsys):
+    from lerobot_factorworld.cli import main
+    from lerobot_factorworld.study.plan import describe
+    from lerobot_factorworld.study.runner import run_study
+
+    monkeypatch.chdir(tmp_path)
+    cfg = _cfg(methods=[_r3m("weights/none.pt")], out_dir=str(tmp_path / "study"))
+    with pytest.raises(FileNotFoundError, match=r"weights file\(s\) not found: method 'r3m': encoder_weights_path"):
+        run_study(cfg)
+    assert not (tmp_path / "study").exists()
+    assert "not startable yet" in describe(cfg, make_plan(cfg))
+    config = tmp_path / "s.yaml"
+    config.write_text(
+        json.dumps(
+            {
+                "tasks": ["door-open"],
+                "n_train_envs": [1],
+                "factors": ["light"],
+                "out_dir": "study",
+                "methods": [_r3m("weights/none.pt")],
+                "collect": {"demos": 1},
+                "eval": {"n_test_envs": 1, "episodes": 1},
+            }
+        )
+    )
+    with pytest.raises(SystemExit):
+        main(["study", f"--config={config}"])
+    err = capsys.readouterr().err
+    assert err.startswith("error: weights file(s) not found") and len(err.splitlines()) == 1
+    assert str(tmp_path / "weights" / "none.pt") in err and not (tmp_path / "study" / "steps").exists()
+
+
+# --- 4. Ray resources ---------------------------------------------------------------------------
+
+
+def test_ray_requests_are_checked_against_the_cluster():
+    from lerobot_factorworld.study.executors import check_feasible, local_cpus, step_resources
+
+    cfg = _cfg(
+        train={"threads": 4, "device": "cuda"},
+        eval={"n_test_envs": 2, "episodes": 2, "threads": 3},
+        collect={"demos": 2, "workers": 2},
+    )
+    plan = make_plan(cfg)
+    requests = {kind: step_resources(plan.of_kind(kind)[0]) for kind in ("collect", "train", "eval")}
+    assert requests == {
+        "collect": {"num_cpus": 2, "num_gpus": 0},
+        "train": {"num_cpus": 4, "num_gpus": 1},
+        "eval": {"num_cpus": 3, "num_gpus": 0},
+    }
+    assert local_cpus(2, list(requests.values())) == 4 and local_cpus(8, list(requests.values())) == 8
+    with pytest.raises(ValueError, match="asks Ray for 4 CPUs .* the cluster has 2"):
+        check_feasible(list(requests.values()), {"CPU": 2.0, "GPU": 1.0})
+    with pytest.raises(ValueError, match="asks Ray for a GPU .* the cluster has 0"):
+        check_feasible(list(requests.values()), {"CPU": 16.0})
+    check_feasible(list(requests.values()), {"CPU": 4.0, "GPU": 1.0})
+    check_feasible([], {})
+
+
+# --- 5. methods ---------------------------------------------------------------------------------
+
+
+def test_duplicate_method_names_and_duplicate_policy_settings_are_refused():
+    with pytest.raises(ValueError, match="method names must be distinct: bc given more than once"):
+        _cfg(methods=[BC, {"name": "bc", "policy": {"type": "bc", "augmentation": "shift"}}])
+    with pytest.raises(ValueError, match="methods 'bc' and 'bc_again' have the same policy settings"):
+        _cfg(methods=[BC, {"name": "bc_again", "policy": {"type": "bc"}}])
+    cfg = _cfg(methods=[BC, {"name": "bc_shift", "policy": {"type": "bc", "augmentation": "shift"}}])
+    assert len(make_plan(cfg).of_kind("train")) == 4
+
+
+# --- 6. results in a moved study folder ---------------------------------------------------------
+
+
+def test_results_name_paths_relative_to_the_study_folder_and_a_moved_study_still_reads_them(tmp_path, monkeypatch):
+    from lerobot_factorworld.study import steps
+
+    def fake_collect(step, folder, deps):
+        (folder / "data").mkdir()
+        return {"root": str(folder / "data"), "repo_id": "x", "episodes": 1, "frames": 1, "failures": {}}
+
+    monkeypatch.setitem(steps.RUNNERS, "collect", fake_collect)
+    cfg = _cfg(out_dir=str(tmp_path / "a"))
+    step = make_plan(cfg).of_kind("collect")[0]
+    steps.run_step(step.to_dict(), str(tmp_path / "a"))
+    stored = json.loads((step.folder(tmp_path / "a") / "result.json").read_text())
+    assert stored["root"] == f"steps/collect/{step.key}/data"
+    shutil.move(tmp_path / "a", tmp_path / "b")
+    assert steps.read_result(step, tmp_path / "b")["root"] == str(
+        tmp_path / "b" / "steps" / "collect" / step.key / "data"
+    )
+    # a result of the first format (absolute paths) in a folder that has moved since
+    stored["root"] = str(tmp_path / "a" / "steps" / "collect" / step.key / "data")
+    (step.folder(tmp_path / "b") / "result.json").write_text(json.dumps(stored))
+    assert steps.read_result(step.folder(tmp_path / "b"))["root"] == str(step.folder(tmp_path / "b") / "data")
+
+
+# --- 7. the pick family's language conditions ---------------------------------------------------
+
+
+def test_pick_language_conditions_and_n_objects_in_a_study():
+    from lerobot_factorworld.factors.sampling import PICK_OBJECTS
+    from lerobot_factorworld.study.steps import collect_config
+
+    factors = ["light", "table_texture", "held_out_phrasings", "held_out_objects"]
+    cfg = _cfg(tasks=["pick"], n_train_envs=[2], factors=factors, pairs=["all"], collect={"demos": 2, "n_objects": 3})
+    assert cfg.pair_conditions() == ["light+table_texture"]
+    conditions = {s.meta["condition"] for s in make_plan(cfg).of_kind("eval")}
+    assert conditions == {"train", *factors, "light+table_texture"}
+    collect = make_plan(cfg).of_kind("collect")[0]
+    assert collect.inputs["n_objects"] == 3
+    assert collect_config(collect.inputs, Path("/tmp/x"), collect.key).sampling.n_objects == 3
+    default = _cfg(tasks=["pick"], n_train_envs=[2], factors=factors)
+    assert make_plan(default).of_kind("collect")[0].inputs["n_objects"] == PICK_OBJECTS[1]
+    assert collect.key not in _keys(default, "collect")
+    assert "n_objects" not in make_plan(_cfg()).of_kind("collect")[0].inputs  # door-open: not in its key
+    with pytest.raises(ValueError, match="applies to the pick family only .* not to door-open"):
+        _cfg(factors=["light", "held_out_objects"])
+    with pytest.raises(ValueError, match="collect.n_objects applies to the pick family only"):
+        _cfg(collect={"demos": 2, "n_objects": 3})
+    with pytest.raises(ValueError, match="stand alone"):
+        _cfg(tasks=["pick"], n_train_envs=[2], factors=factors, pairs=["light+held_out_objects"])
+
+
+def test_pick_study_config_plans_the_real_robot_conditions():
+    from lerobot_factorworld.cli_errors import parse_config
+
+    cfg = parse_config(StudyConfig, [f"--config_path={ROOT / 'configs' / 'study' / 'pick.yaml'}"], "study")
+    conditions = [s.meta["condition"] for s in make_plan(cfg).of_kind("eval")]
+    assert conditions[0] == "train" and len(conditions) == 10
+    assert {"held_out_phrasings", "held_out_objects", "table_texture+floor_texture"} <= set(conditions)
+    assert cfg.methods[0].policy["use_language"] is True and cfg.collect.n_objects == 3
+
+
+# --- 8. cost ------------------------------------------------------------------------------------
+
+
+def test_frozen_resnet_encoders_cost_more_than_the_conv_encoder(tmp_path, monkeypatch):
+    from lerobot_factorworld.study.plan import estimate
+
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "w.pt").write_bytes(b"w")
+    for policy in ({"type": "bc", "augmentation": "none"}, {"type": "bc", "augmentation": "shift"}):
+        conv = _cfg(methods=[{"name": "conv", "policy": policy}], train={"steps": 1000})
+        r3m = _cfg(
+            methods=[{"name": "r3m", "policy": {**policy, "encoder": "r3m_rn50", "encoder_weights_path": "w.pt"}}],
+            train={"steps": 1000},
+        )
+        hours = {name: estimate(make_plan(c), list(make_plan(c).steps)) for name, c in (("conv", conv), ("r3m", r3m))}
+        for profile in hours["conv"]:
+            assert hours["r3m"][profile] > 1.5 * hours["conv"][profile], (policy, profile)
