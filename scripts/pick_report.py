@@ -19,22 +19,9 @@ from pathlib import Path
 from lerobot_factorworld.envs.configs import FactorWorldEnvConfig
 from lerobot_factorworld.pick.catalog import PICK_TASK
 from lerobot_factorworld.pick.records import breakdown, episode_records
-from lerobot_factorworld.study.metrics import wilson_interval
+from lerobot_factorworld.study.metrics import PAPER_REAL_ROBOT, wilson_interval
 
-# The paper's real-robot success rates (Sec. 5.1, RT-1 with crop + photometric augmentation, 12 trials each),
-# by the Factor World condition that plays the factor's part here.
-PAPER = {
-    "train": ("original", 91.7),
-    "floor_texture": ("new background", 88.9),
-    "distractors": ("new distractors", 80.6),
-    "light": ("new lighting", 83.3),
-    "table_texture": ("new table texture", 52.8),
-    "camera_pos": ("new camera pose", 45.8),
-    "table_texture+floor_texture": ("table texture + background", 55.6),
-    "table_texture+distractors": ("table texture + distractors", 50.0),
-    "held_out_phrasings": ("held-out phrasings", None),
-    "held_out_objects": ("held-out objects", None),
-}
+PAPER = PAPER_REAL_ROBOT  # condition -> (the paper's name, its real-robot success %)
 
 
 def condition_records(data_root: str, condition: str, n_episodes: int, test_envs: int, start_seed: int) -> list[dict]:

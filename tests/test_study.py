@@ -84,6 +84,24 @@ def test_the_pairs_section_counts_cells_whose_pair_metric_is_undefined():
     assert "| light+camera_pos | -0.500 | " in text and "| 1 of 2 |" in text  # seed 1: (0.2 - 0.4) / 0.4
 
 
+def test_a_pick_study_report_sets_success_next_to_the_papers_real_robot_table():
+    from lerobot_factorworld.study.config import StudyConfig
+    from lerobot_factorworld.study.report import DEFAULT_WIDTHS, _real_robot_section
+
+    cfg = StudyConfig(tasks=["pick"], train_factors=["light", "camera_pos", "table_texture"],
+                      factors=["light", "camera_pos", "table_texture", "held_out_objects"], seeds=[0, 1])
+    successes = {"train": (9, 8), "light": (8, 7), "camera_pos": (2, 3), "table_texture": (5, 4), "held_out_objects": (1, 0)}
+    rows = [{"method": cfg.methods[0].name, "task": "pick", "seed": seed, "widths": DEFAULT_WIDTHS,
+             "condition": c, "successes": k[seed], "episodes": 10} for c, k in successes.items() for seed in (0, 1)]
+    text = "\n".join(_real_robot_section(cfg, rows))
+    assert "| original (`train`) | 91.7% | 17/20 | 0.85 [0.64, 0.95] |" in text
+    assert "| held-out objects (`held_out_objects`) | — | 1/20 |" in text
+    # light 0.75 > table texture 0.45 > camera 0.25, as in the paper (83.3 > 52.8 > 45.8)
+    assert "**+1.00**" in text and "easiest first here: light, table_texture, camera_pos" in text
+    door = [dict(r, task="door-open") for r in rows]
+    assert _real_robot_section(cfg, door) == []
+
+
 # --- protocol -----------------------------------------------------------------------------------
 
 

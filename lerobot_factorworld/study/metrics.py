@@ -44,6 +44,23 @@ PAPER_FACTOR_RANKS_STATED: dict[str, float] = {
 }
 
 
+PAPER_REAL_ROBOT: dict[str, tuple[str, float | None]] = {
+    # Section 5.1's real-robot success rates (RT-1 with crop + photometric augmentation, 12 trials per
+    # factor), by the Factor World condition that plays the factor's part in the pick family; the two
+    # language conditions have no counterpart in the paper.
+    "train": ("original", 91.7),
+    "floor_texture": ("new background", 88.9),
+    "distractors": ("new distractors", 80.6),
+    "light": ("new lighting", 83.3),
+    "table_texture": ("new table texture", 52.8),
+    "camera_pos": ("new camera pose", 45.8),
+    "table_texture+floor_texture": ("table texture + background", 55.6),
+    "table_texture+distractors": ("table texture + distractors", 50.0),
+    "held_out_phrasings": ("held-out phrasings", None),
+    "held_out_objects": ("held-out objects", None),
+}
+
+
 def wilson_interval(successes: int, n: int, z: float = Z95) -> tuple[float, float]:
     """Wilson score interval of a success rate; ``(nan, nan)`` for ``n == 0``."""
     if n == 0:

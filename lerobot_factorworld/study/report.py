@@ -15,6 +15,7 @@ from .config import RADIUS_FACTORS, StudyConfig
 from .metrics import (
     PAPER_FACTOR_RANKS,
     PAPER_FACTOR_RANKS_STATED,
+    PAPER_REAL_ROBOT,
     interaction,
     mean_se,
     pair_metric,
@@ -423,6 +424,7 @@ def _markdown(cfg: StudyConfig, plan: Plan, rows: list[dict], plots: list[Path],
     if unequal:
         lines += [f"**Coverage:** {len(unequal)} row(s) did not visit their environments equally.", ""]
     lines += _ordering_section(cfg, rows)
+    lines += _real_robot_section(cfg, rows)
     lines += _gap_table(cfg, rows)
     lines += _pairs_section(cfg, rows)
     lines += _radius_section(cfg, rows)
@@ -495,6 +497,52 @@ def _ordering_section(cfg: StudyConfig, rows: list[dict]) -> list[str]:
         "reading of Fig. 3a."
     )
     lines.append("")
+    return lines
+
+
+def _real_robot_section(cfg: StudyConfig, rows: list[dict]) -> list[str]:
+    """The pick family's rows next to the paper's real-robot table (success pooled over N and seeds)."""
+    from ..tasks import get_task
+
+    pick = [r for r in rows if get_task(r["task"]).family == "pick" and r["widths"] == DEFAULT_WIDTHS]
+    if not pick:
+        return []
+    lines = [
+        "## Pick next to the paper's real-robot table",
+        "",
+        "Success pooled over tasks of the pick family, N and seeds (Wilson 95% interval); the paper's numbers are "
+        "RT-1 on a real robot, 12 trials per factor (section 5.1).",
+        "",
+        "| method | condition | paper (real robot) | successes | success rate [Wilson 95%] |",
+        "|---|---|---|---|---|",
+    ]
+    for method in cfg.methods:
+        rates = {}
+        for condition in [TRAIN_SUITE, *cfg.conditions()]:
+            cell = [r for r in pick if r["method"] == method.name and r["condition"] == condition]
+            if not cell:
+                continue
+            k, n = sum(r["successes"] for r in cell), sum(r["episodes"] for r in cell)
+            low, high = wilson_interval(k, n)
+            name, paper = PAPER_REAL_ROBOT.get(condition, (condition, None))
+            rates[condition] = k / n
+            lines.append(
+                f"| {method.name} | {name} (`{condition}`) | {'—' if paper is None else f'{paper:.1f}%'} | {k}/{n} | "
+                f"{k / n:.2f} [{low:.2f}, {high:.2f}] |"
+            )
+        shifted = [c for c in rates if c != TRAIN_SUITE and PAPER_REAL_ROBOT.get(c, ("", None))[1] is not None]
+        rho = spearman({c: rates[c] for c in shifted}, {c: PAPER_REAL_ROBOT[c][1] for c in shifted})
+        if not math.isnan(rho):
+            lines += [
+                "",
+                f"{method.name}: Spearman correlation of the {len(shifted)} shifted conditions' success rates with the "
+                f"paper's real-robot ones: **{rho:+.2f}** (easiest first here: "
+                + ", ".join(sorted(shifted, key=lambda c: -rates[c]))
+                + "; in the paper: "
+                + ", ".join(sorted(shifted, key=lambda c: -PAPER_REAL_ROBOT[c][1]))
+                + ").",
+            ]
+        lines.append("")
     return lines
 
 
