@@ -73,8 +73,10 @@ def main() -> None:
         k, mean_steps = run_cell(configs, args.episodes, width)
         lo, hi = _wilson(k, args.episodes)
         print(f"| {name} | {k}/{args.episodes} ({k / args.episodes:.0%}) | [{lo:.0%}, {hi:.0%}] | {mean_steps:.0f} |")
-    print(f"\n{len(rows)} cells x {args.episodes} episodes, {args.n_envs} environments per cell, "
-          f"{time.perf_counter() - start:.0f} s")
+    print(
+        f"\n{len(rows)} cells x {args.episodes} episodes, {args.n_envs} environments per cell, "
+        f"{time.perf_counter() - start:.0f} s"
+    )
 
 
 def _wilson(k: int, n: int) -> tuple[float, float]:

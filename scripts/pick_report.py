@@ -27,8 +27,9 @@ PAPER = PAPER_REAL_ROBOT  # condition -> (the paper's name, its real-robot succe
 def condition_records(data_root: str, condition: str, n_episodes: int, test_envs: int, start_seed: int) -> list[dict]:
     """What every episode of ``condition`` asked for (instruction, named object), by re-resetting its envs."""
     shifts = [] if condition == "train" else [condition]
-    cfg = FactorWorldEnvConfig(task=PICK_TASK, dataset_root=data_root, shifts=shifts,
-                               include_train=condition == "train", n_test_envs=test_envs)
+    cfg = FactorWorldEnvConfig(
+        task=PICK_TASK, dataset_root=data_root, shifts=shifts, include_train=condition == "train", n_test_envs=test_envs
+    )
     configs = cfg.suites(PICK_TASK)[condition]
     seeds = [start_seed + i for i in range(n_episodes)]
     return episode_records(configs, seeds, cfg.sampling.widths.get("object_pos"))
@@ -73,7 +74,9 @@ def main() -> None:
         sim = sorted(shifted, key=lambda c: -sum(results[c]) / len(results[c]))
         paper = sorted(shifted, key=lambda c: -PAPER[c][1])
         print(f"\nordering, easiest first: simulation {', '.join(sim)}; paper {', '.join(paper)}")
-        print(f"Spearman rank correlation over the {len(shifted)} shifted conditions: {_spearman(results, shifted):.2f}")
+        print(
+            f"Spearman rank correlation over the {len(shifted)} shifted conditions: {_spearman(results, shifted):.2f}"
+        )
     tables = (("named object", by_target), ("named object's shape", by_shape), ("phrasing template", by_template))
     for title, table in tables:
         keys = sorted({k for _, k in table})

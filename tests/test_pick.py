@@ -68,8 +68,17 @@ def test_held_out_objects_and_phrasings_are_disjoint_seeded_splits_covering_ever
 def test_the_task_row_and_support_matrix_derive_from_the_catalogue():
     task = get_task(TASK)
     assert task.max_episode_steps == catalog.MAX_EPISODE_STEPS and task.lookalike_families == catalog.LOOKALIKE_FAMILIES
-    expected = {"object_pos", "arm_pos", "camera_pos", "table_pos", "object_texture", "table_texture",
-                "floor_texture", "light", "distractors"}
+    expected = {
+        "object_pos",
+        "arm_pos",
+        "camera_pos",
+        "table_pos",
+        "object_texture",
+        "table_texture",
+        "floor_texture",
+        "light",
+        "distractors",
+    }
     assert set(supported_factors(TASK)) == expected and set(FACTORS) - expected == {"object_size", "object_shape"}
     assert "instruction names" in support_reason("object_shape", TASK)
     cli = subprocess.run([sys.executable, "-m", "lerobot_factorworld.cli", "factors"], capture_output=True, text=True)
@@ -133,7 +142,9 @@ def test_a_pick_configuration_takes_no_free_form_instruction_and_validates_its_l
         SceneConfig("pick-place", pick=layout)
     a, b = layout.objects[:2]
     with pytest.raises(ValueError, match="differ in colour"):
-        replace(layout, objects=(a, replace(b, name=a.name.split("_")[0] + "_" + b.name.split("_")[1]), *layout.objects[2:]))
+        replace(
+            layout, objects=(a, replace(b, name=a.name.split("_")[0] + "_" + b.name.split("_")[1]), *layout.objects[2:])
+        )
     with pytest.raises(ValueError, match="off the pick workspace"):
         replace(layout, objects=(replace(a, x=0.5), *layout.objects[1:]))
     with pytest.raises(ValueError, match="overlap"):
@@ -303,8 +314,9 @@ def test_distractors_stand_outside_the_pick_workspace_and_look_like_no_pick_obje
     from lerobot_factorworld.pick.layout import workspace_keepout
 
     xmin, ymin, xmax, ymax = workspace_keepout(0.0)
-    configs = sample_configs(TASK, 30, seed=3, split="eval", factors=("distractors",),
-                             options=SamplingOptions(n_distractors=3))
+    configs = sample_configs(
+        TASK, 30, seed=3, split="eval", factors=("distractors",), options=SamplingOptions(n_distractors=3)
+    )
     for config in configs:
         for item in config.factors.distractors:
             half = item.size / 2
@@ -335,8 +347,18 @@ def test_evaluated_episodes_records_are_recovered_from_their_seeds_and_broken_do
 @pytest.fixture(scope="module")
 def pick_dataset(tmp_path_factory):
     root = tmp_path_factory.mktemp("pick") / "data"
-    cfg = CollectConfig(task=TASK, factors=["light"], n_envs=2, demos_per_env=2, seed=1, image_size=48,
-                        root=str(root), repo_id="local/pick", workers=1, use_videos=False)
+    cfg = CollectConfig(
+        task=TASK,
+        factors=["light"],
+        n_envs=2,
+        demos_per_env=2,
+        seed=1,
+        image_size=48,
+        root=str(root),
+        repo_id="local/pick",
+        workers=1,
+        use_videos=False,
+    )
     return root, collect(cfg)
 
 
@@ -362,19 +384,48 @@ def test_rt1_trains_across_instructions_and_lerobot_eval_reports_every_condition
     env = {**os.environ, "MUJOCO_GL": "egl"}
     out = tmp_path / "train"
     train = subprocess.run(
-        [str(BIN / "lerobot-train"), "--policy.type=rt1", "--policy.preset=small", "--policy.device=cpu",
-         "--policy.push_to_hub=false", "--dataset.repo_id=local/pick", f"--dataset.root={root}", "--steps=4",
-         "--batch_size=2", "--num_workers=0", "--save_freq=4", "--log_freq=2", "--seed=0", f"--output_dir={out}"],
-        capture_output=True, text=True, timeout=900, env=env,
+        [
+            str(BIN / "lerobot-train"),
+            "--policy.type=rt1",
+            "--policy.preset=small",
+            "--policy.device=cpu",
+            "--policy.push_to_hub=false",
+            "--dataset.repo_id=local/pick",
+            f"--dataset.root={root}",
+            "--steps=4",
+            "--batch_size=2",
+            "--num_workers=0",
+            "--save_freq=4",
+            "--log_freq=2",
+            "--seed=0",
+            f"--output_dir={out}",
+        ],
+        capture_output=True,
+        text=True,
+        timeout=900,
+        env=env,
     )
     assert train.returncode == 0, train.stderr[-3000:]
     conditions = ["light", "held_out_phrasings", "held_out_objects"]
     evaluate = subprocess.run(
-        [str(BIN / "lerobot-eval"), f"--policy.path={out / 'checkpoints/last/pretrained_model'}",
-         "--env.type=factorworld", f"--env.task={TASK}", f"--env.dataset_root={root}", "--env.image_size=48",
-         f"--env.shifts=[{','.join(conditions)}]", "--env.n_test_envs=2", "--env.episode_length=4",
-         "--eval.n_episodes=2", "--eval.batch_size=1", f"--output_dir={tmp_path / 'eval'}"],
-        capture_output=True, text=True, timeout=900, env=env,
+        [
+            str(BIN / "lerobot-eval"),
+            f"--policy.path={out / 'checkpoints/last/pretrained_model'}",
+            "--env.type=factorworld",
+            f"--env.task={TASK}",
+            f"--env.dataset_root={root}",
+            "--env.image_size=48",
+            f"--env.shifts=[{','.join(conditions)}]",
+            "--env.n_test_envs=2",
+            "--env.episode_length=4",
+            "--eval.n_episodes=2",
+            "--eval.batch_size=1",
+            f"--output_dir={tmp_path / 'eval'}",
+        ],
+        capture_output=True,
+        text=True,
+        timeout=900,
+        env=env,
     )
     assert evaluate.returncode == 0, evaluate.stderr[-3000:]
     info = json.loads((tmp_path / "eval" / "eval_info.json").read_text())
@@ -382,10 +433,25 @@ def test_rt1_trains_across_instructions_and_lerobot_eval_reports_every_condition
     assert all("pc_success" in group for group in info["per_group"].values())
     # The simulation CNN policy trains on it too, conditioned on the instruction's embedding.
     bc = subprocess.run(
-        [str(BIN / "lerobot-train"), "--policy.type=bc", "--policy.use_language=true", "--policy.device=cpu",
-         "--policy.push_to_hub=false", "--dataset.repo_id=local/pick", f"--dataset.root={root}", "--steps=2",
-         "--batch_size=2", "--num_workers=0", "--save_freq=2", "--seed=0", f"--output_dir={tmp_path / 'bc'}"],
-        capture_output=True, text=True, timeout=900, env=env,
+        [
+            str(BIN / "lerobot-train"),
+            "--policy.type=bc",
+            "--policy.use_language=true",
+            "--policy.device=cpu",
+            "--policy.push_to_hub=false",
+            "--dataset.repo_id=local/pick",
+            f"--dataset.root={root}",
+            "--steps=2",
+            "--batch_size=2",
+            "--num_workers=0",
+            "--save_freq=2",
+            "--seed=0",
+            f"--output_dir={tmp_path / 'bc'}",
+        ],
+        capture_output=True,
+        text=True,
+        timeout=900,
+        env=env,
     )
     assert bc.returncode == 0, bc.stderr[-3000:]
 
@@ -393,7 +459,9 @@ def test_rt1_trains_across_instructions_and_lerobot_eval_reports_every_condition
 def test_the_collect_config_file_parses():
     import draccus
 
-    cfg = draccus.parse(CollectConfig, config_path=str(Path(__file__).parents[1] / "configs/collect_pick.yaml"), args=[])
+    cfg = draccus.parse(
+        CollectConfig, config_path=str(Path(__file__).parents[1] / "configs/collect_pick.yaml"), args=[]
+    )
     assert cfg.task == TASK and cfg.sampling.n_objects == 3
 
 

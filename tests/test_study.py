@@ -74,12 +74,26 @@ def test_the_pairs_section_counts_cells_whose_pair_metric_is_undefined():
 
     def row(seed, condition, rate, gap):
         n_factors = condition.count("+") + 1
-        return {"method": cfg.methods[0].name, "task": "door-open", "n_train_envs": 5, "seed": seed,
-                "widths": DEFAULT_WIDTHS, "condition": condition, "n_factors": n_factors,
-                "success_rate": rate, "gap": gap}
+        return {
+            "method": cfg.methods[0].name,
+            "task": "door-open",
+            "n_train_envs": 5,
+            "seed": seed,
+            "widths": DEFAULT_WIDTHS,
+            "condition": condition,
+            "n_factors": n_factors,
+            "success_rate": rate,
+            "gap": gap,
+        }
 
-    rows = [row(0, "light", 0.5, 0.5), row(0, "camera_pos", 0.0, 1.0), row(0, "light+camera_pos", 0.0, 1.0),
-            row(1, "light", 0.5, 0.5), row(1, "camera_pos", 0.4, 0.6), row(1, "light+camera_pos", 0.2, 0.8)]
+    rows = [
+        row(0, "light", 0.5, 0.5),
+        row(0, "camera_pos", 0.0, 1.0),
+        row(0, "light+camera_pos", 0.0, 1.0),
+        row(1, "light", 0.5, 0.5),
+        row(1, "camera_pos", 0.4, 0.6),
+        row(1, "light+camera_pos", 0.2, 0.8),
+    ]
     text = "\n".join(_pairs_section(cfg, rows))
     assert "| light+camera_pos | -0.500 | " in text and "| 1 of 2 |" in text  # seed 1: (0.2 - 0.4) / 0.4
 
@@ -88,11 +102,32 @@ def test_a_pick_study_report_sets_success_next_to_the_papers_real_robot_table():
     from lerobot_factorworld.study.config import StudyConfig
     from lerobot_factorworld.study.report import DEFAULT_WIDTHS, _real_robot_section
 
-    cfg = StudyConfig(tasks=["pick"], train_factors=["light", "camera_pos", "table_texture"],
-                      factors=["light", "camera_pos", "table_texture", "held_out_objects"], seeds=[0, 1])
-    successes = {"train": (9, 8), "light": (8, 7), "camera_pos": (2, 3), "table_texture": (5, 4), "held_out_objects": (1, 0)}
-    rows = [{"method": cfg.methods[0].name, "task": "pick", "seed": seed, "widths": DEFAULT_WIDTHS,
-             "condition": c, "successes": k[seed], "episodes": 10} for c, k in successes.items() for seed in (0, 1)]
+    cfg = StudyConfig(
+        tasks=["pick"],
+        train_factors=["light", "camera_pos", "table_texture"],
+        factors=["light", "camera_pos", "table_texture", "held_out_objects"],
+        seeds=[0, 1],
+    )
+    successes = {
+        "train": (9, 8),
+        "light": (8, 7),
+        "camera_pos": (2, 3),
+        "table_texture": (5, 4),
+        "held_out_objects": (1, 0),
+    }
+    rows = [
+        {
+            "method": cfg.methods[0].name,
+            "task": "pick",
+            "seed": seed,
+            "widths": DEFAULT_WIDTHS,
+            "condition": c,
+            "successes": k[seed],
+            "episodes": 10,
+        }
+        for c, k in successes.items()
+        for seed in (0, 1)
+    ]
     text = "\n".join(_real_robot_section(cfg, rows))
     assert "| original (`train`) | 91.7% | 17/20 | 0.85 [0.64, 0.95] |" in text
     assert "| held-out objects (`held_out_objects`) | — | 1/20 |" in text
@@ -170,7 +205,10 @@ def test_coverage_of_batched_resets_does_not_count_lerobot_evals_padding_as_scor
     # 15 episodes in batches of 10 reset 20 seeds; only the first 15 are scored: never claim "equal"
     unequal, message = reset_coverage(range(1000, 1020), 10, 10, "light")
     assert not unequal and "only if --eval.n_episodes is one of 20" in message
-    assert reset_coverage(range(1000, 1020), 10, 1, "light") == (False, coverage(range(1000, 1020), 10).describe("light"))
+    assert reset_coverage(range(1000, 1020), 10, 1, "light") == (
+        False,
+        coverage(range(1000, 1020), 10).describe("light"),
+    )
     unequal, message = reset_coverage(range(1000, 1006), 4, 3, "light")  # 4, 5 or 6 scored: 4 is equal
     assert not unequal and "one of 4 " in message
     assert reset_coverage(range(1000, 1003), 4, 3, "light")[0]  # 1..3 scored: never equal

@@ -176,7 +176,9 @@ class SceneConfig:
             lines.append(f"  {name:15s} {_format(value)}")
         if self.pick is not None:
             lines.append(f"  {'pick objects':15s} {', '.join(self.pick.names)}")
-            lines.append(f"  {'pick target':15s} {self.pick.target or 'per episode: ' + ', '.join(self.pick.candidates)}")
+            lines.append(
+                f"  {'pick target':15s} {self.pick.target or 'per episode: ' + ', '.join(self.pick.candidates)}"
+            )
         if len(lines) == 1:
             lines.append("  (default scene)")
         return "\n".join(lines)

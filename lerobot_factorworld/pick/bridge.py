@@ -57,13 +57,20 @@ def _env_class(metaworld_name: str) -> type:
             rest = get_object(item.name).family.half_height
             qpos[joint.qposadr[0] : joint.qposadr[0] + 7] = [
                 *(TABLE_CENTER + [item.x, item.y, rest]),
-                np.cos(item.yaw / 2), 0.0, 0.0, np.sin(item.yaw / 2),
+                np.cos(item.yaw / 2),
+                0.0,
+                0.0,
+                np.sin(item.yaw / 2),
             ]
             qvel[joint.dofadr[0] : joint.dofadr[0] + 6] = 0.0
         self.set_state(qpos, qvel)
-        self._pick_rest = {item.name: float(self.data.body(body_name(item.name)).xpos[2]) for item in self._pick_objects}
+        self._pick_rest = {
+            item.name: float(self.data.body(body_name(item.name)).xpos[2]) for item in self._pick_objects
+        }
         target = self.data.body(self._pick_target_body).xpos
-        self._target_pos = np.array([target[0], target[1], self._pick_rest[self._pick_target] + LIFT_HEIGHT + LIFT_MARGIN])
+        self._target_pos = np.array(
+            [target[0], target[1], self._pick_rest[self._pick_target] + LIFT_HEIGHT + LIFT_MARGIN]
+        )
         self.obj_init_pos = target.copy()
         self.init_tcp = self.tcp_center
         self.init_left_pad = self.get_body_com("leftpad")

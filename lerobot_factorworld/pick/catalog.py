@@ -238,8 +238,11 @@ LOOKALIKE_FAMILIES: tuple[str, ...] = tuple(sorted({s.asset_family for s in SHAP
 """Procedural shape families no distractor is drawn from in pick scenes."""
 
 UNSUPPORTED_FACTORS: tuple[tuple[str, str], ...] = tuple(
-    (factor, "pick objects are told apart by shape family and colour, which the instruction names; "
-     "resizing or reshaping them would change what the instruction refers to")
+    (
+        factor,
+        "pick objects are told apart by shape family and colour, which the instruction names; "
+        "resizing or reshaping them would change what the instruction refers to",
+    )
     for factor in ("object_size", "object_shape")
 )
 """Factors that do not apply to the family, with the reason (shown by the support checks)."""

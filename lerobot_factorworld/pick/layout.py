@@ -203,7 +203,6 @@ def _wrap(angle: float) -> float:
     return (angle + math.pi) % (2 * math.pi) - math.pi
 
 
-
 def workspace_keepout(clearance: float) -> tuple[float, float, float, float]:
     """The box (table frame: xmin, ymin, xmax, ymax) any pick object can reach: every slot, its jitter,
     the largest footprint and the widest arrangement offset (``object_pos``), plus ``clearance``.

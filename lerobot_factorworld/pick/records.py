@@ -30,8 +30,9 @@ def episode_records(configs: Sequence[Any], seeds: Sequence[int], object_pos_wid
 
     if not configs or configs[0].pick is None:
         return []
-    env = FactorWorldEnv(configs[0].task, tuple(configs), cameras=(), scene_cache_size=len(configs),
-                         object_pos_width=object_pos_width)
+    env = FactorWorldEnv(
+        configs[0].task, tuple(configs), cameras=(), scene_cache_size=len(configs), object_pos_width=object_pos_width
+    )
     try:
         return [env.reset(seed=int(seed))[1]["pick"] for seed in seeds]
     finally:
@@ -64,9 +65,19 @@ def study_breakdowns(plan: Any, study_dir: str | Path) -> list[dict]:
         meta = step.meta
         for by in BY:
             for value, outcomes in breakdown(result["successes"], result["pick"], by).items():
-                rows.append({"method": meta["method"], "task": meta["task"], "n_train_envs": meta["n_train_envs"],
-                             "seed": meta["seed"], "condition": meta["condition"], "by": by, "value": value,
-                             "episodes": len(outcomes), "successes": sum(outcomes)})
+                rows.append(
+                    {
+                        "method": meta["method"],
+                        "task": meta["task"],
+                        "n_train_envs": meta["n_train_envs"],
+                        "seed": meta["seed"],
+                        "condition": meta["condition"],
+                        "by": by,
+                        "value": value,
+                        "episodes": len(outcomes),
+                        "successes": sum(outcomes),
+                    }
+                )
     return rows
 
 
@@ -82,8 +93,12 @@ def write_study_breakdowns(plan: Any, study_dir: str | Path) -> list[str]:
         writer = csv.DictWriter(f, fieldnames=BREAKDOWN_COLUMNS, lineterminator="\n")
         writer.writeheader()
         writer.writerows(rows)
-    lines = ["## Pick: success per named object, shape and phrasing", "",
-             f"Summed over N and seeds, per method; per instruction in `{BREAKDOWN_FILE}`.", ""]
+    lines = [
+        "## Pick: success per named object, shape and phrasing",
+        "",
+        f"Summed over N and seeds, per method; per instruction in `{BREAKDOWN_FILE}`.",
+        "",
+    ]
     conditions = list(dict.fromkeys(r["condition"] for r in rows))
     for method in dict.fromkeys(r["method"] for r in rows):
         mine = [r for r in rows if r["method"] == method]

@@ -59,8 +59,11 @@ def _add_object(spec: mujoco.MjSpec, item: PlacedObject, texture: str | None) ->
     body.explicitinertial = True
     body.ipos, body.iquat = [0.0, 0.0, 0.0], [1.0, 0.0, 0.0, 0.0]  # centre of mass at the object's centre
     body.mass = MASS
-    body.inertia = [MASS / 12 * (dims[1] ** 2 + dims[2] ** 2), MASS / 12 * (dims[0] ** 2 + dims[2] ** 2),
-                    MASS / 12 * (dims[0] ** 2 + dims[1] ** 2)]
+    body.inertia = [
+        MASS / 12 * (dims[1] ** 2 + dims[2] ** 2),
+        MASS / 12 * (dims[0] ** 2 + dims[2] ** 2),
+        MASS / 12 * (dims[0] ** 2 + dims[1] ** 2),
+    ]
 
 
 def _tinted_texture(spec: mujoco.MjSpec, material, value: str, rgb: tuple[float, float, float]) -> None:
@@ -72,8 +75,9 @@ def _tinted_texture(spec: mujoco.MjSpec, material, value: str, rgb: tuple[float,
     tinted = np.clip(shade[..., None] * np.asarray(rgb) * 255.0, 0, 255).astype(np.uint8)
     faces = np.ascontiguousarray(np.concatenate([tinted] * 6, axis=0))  # a cube texture: six faces stacked
     name = f"{material.name}_tex"
-    tex = spec.add_texture(name=name, type=mujoco.mjtTexture.mjTEXTURE_CUBE, width=faces.shape[1],
-                           height=faces.shape[0], nchannel=3)
+    tex = spec.add_texture(
+        name=name, type=mujoco.mjtTexture.mjTEXTURE_CUBE, width=faces.shape[1], height=faces.shape[0], nchannel=3
+    )
     tex.data = faces.tobytes()
     tex.info = f"pick object texture {value}"
     textures = list(material.textures)
@@ -90,8 +94,16 @@ G = mujoco.mjtGeom
 def _geom(body, material: str, kind, size, pos=(0.0, 0.0, 0.0), **extra) -> None:
     params = {**CONTACT, **extra}
     # No geom rgba: a geom colour would override the material's (the object's colour or tinted texture).
-    body.add_geom(type=kind, size=list(size) + [0.0] * (3 - len(size)), pos=list(pos), material=material,
-                  group=0, contype=1, conaffinity=1, **params)
+    body.add_geom(
+        type=kind,
+        size=list(size) + [0.0] * (3 - len(size)),
+        pos=list(pos),
+        material=material,
+        group=0,
+        contype=1,
+        conaffinity=1,
+        **params,
+    )
 
 
 def _cube(body, material: str) -> tuple[float, float, float]:
@@ -113,12 +125,30 @@ def _ball(body, material: str) -> tuple[float, float, float]:
 def _mug(body, material: str) -> tuple[float, float, float]:
     _geom(body, material, G.mjGEOM_CYLINDER, (0.027, 0.035))
     # A dark opening on top (visual only) and a C-shaped handle on +x.
-    body.add_geom(type=G.mjGEOM_CYLINDER, size=[0.022, 0.001, 0.0], pos=[0.0, 0.0, 0.035], rgba=[0.08, 0.08, 0.08, 1.0],
-                  contype=0, conaffinity=0, group=1)
-    for fromto in ((0.024, 0, 0.022, 0.046, 0, 0.022), (0.046, 0, 0.022, 0.046, 0, -0.022),
-                   (0.046, 0, -0.022, 0.024, 0, -0.022)):
-        body.add_geom(type=G.mjGEOM_CAPSULE, fromto=list(fromto), size=[0.0055, 0.0, 0.0], material=material,
-                      group=0, contype=1, conaffinity=1, **CONTACT)
+    body.add_geom(
+        type=G.mjGEOM_CYLINDER,
+        size=[0.022, 0.001, 0.0],
+        pos=[0.0, 0.0, 0.035],
+        rgba=[0.08, 0.08, 0.08, 1.0],
+        contype=0,
+        conaffinity=0,
+        group=1,
+    )
+    for fromto in (
+        (0.024, 0, 0.022, 0.046, 0, 0.022),
+        (0.046, 0, 0.022, 0.046, 0, -0.022),
+        (0.046, 0, -0.022, 0.024, 0, -0.022),
+    ):
+        body.add_geom(
+            type=G.mjGEOM_CAPSULE,
+            fromto=list(fromto),
+            size=[0.0055, 0.0, 0.0],
+            material=material,
+            group=0,
+            contype=1,
+            conaffinity=1,
+            **CONTACT,
+        )
     return 0.1, 0.054, 0.07
 
 
@@ -130,8 +160,16 @@ def _bar(body, material: str) -> tuple[float, float, float]:
 def _dumbbell(body, material: str) -> tuple[float, float, float]:
     for x in (-0.045, 0.045):
         _geom(body, material, G.mjGEOM_SPHERE, (0.022,), pos=(x, 0.0, 0.0), condim=6, friction=[1.0, 0.1, 0.005])
-    body.add_geom(type=G.mjGEOM_CAPSULE, fromto=[-0.045, 0, 0, 0.045, 0, 0], size=[0.013, 0.0, 0.0],
-                  material=material, group=0, contype=1, conaffinity=1, **CONTACT)
+    body.add_geom(
+        type=G.mjGEOM_CAPSULE,
+        fromto=[-0.045, 0, 0, 0.045, 0, 0],
+        size=[0.013, 0.0, 0.0],
+        material=material,
+        group=0,
+        contype=1,
+        conaffinity=1,
+        **CONTACT,
+    )
     return 0.134, 0.044, 0.044
 
 
