@@ -454,6 +454,29 @@ def test_rt1_trains_across_instructions_and_lerobot_eval_reports_every_condition
         env=env,
     )
     assert bc.returncode == 0, bc.stderr[-3000:]
+    bc_eval = subprocess.run(
+        [
+            str(BIN / "lerobot-eval"),
+            f"--policy.path={tmp_path / 'bc' / 'checkpoints/last/pretrained_model'}",
+            "--env.type=factorworld",
+            f"--env.task={TASK}",
+            f"--env.dataset_root={root}",
+            "--env.image_size=48",
+            "--env.shifts=[held_out_phrasings]",
+            "--env.n_test_envs=2",
+            "--env.episode_length=4",
+            "--eval.n_episodes=2",
+            "--eval.batch_size=1",
+            f"--output_dir={tmp_path / 'bc_eval'}",
+        ],
+        capture_output=True,
+        text=True,
+        timeout=900,
+        env=env,
+    )
+    assert bc_eval.returncode == 0, bc_eval.stderr[-3000:]
+    groups = json.loads((tmp_path / "bc_eval" / "eval_info.json").read_text())["per_group"]
+    assert set(groups) == {"train", "held_out_phrasings"}
 
 
 def test_the_collect_config_file_parses():
