@@ -11,7 +11,7 @@ $(STAMP): pyproject.toml scripts/setup.sh
 	bash scripts/setup.sh
 	touch $(STAMP)
 
-# The main job: the quick generalization-gap study (collect, train, evaluate, report) in about 10 minutes
+# The main job: the quick generalization-gap study (collect, train, evaluate, report) in 3-10 minutes
 # on 2 cores; writes outputs/study/quick/report.md, results.csv and the plots. Rerunning reuses its steps.
 demo: setup
 	MUJOCO_GL=egl $(BIN)/factorworld study --config configs/study/quick.yaml
