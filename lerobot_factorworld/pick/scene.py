@@ -139,16 +139,7 @@ def _mug(body, material: str) -> tuple[float, float, float]:
         (0.046, 0, 0.022, 0.046, 0, -0.022),
         (0.046, 0, -0.022, 0.024, 0, -0.022),
     ):
-        body.add_geom(
-            type=G.mjGEOM_CAPSULE,
-            fromto=list(fromto),
-            size=[0.0055, 0.0, 0.0],
-            material=material,
-            group=0,
-            contype=1,
-            conaffinity=1,
-            **CONTACT,
-        )
+        _geom(body, material, G.mjGEOM_CAPSULE, (0.0055,), fromto=list(fromto))
     return 0.1, 0.054, 0.07
 
 
@@ -160,16 +151,7 @@ def _bar(body, material: str) -> tuple[float, float, float]:
 def _dumbbell(body, material: str) -> tuple[float, float, float]:
     for x in (-0.045, 0.045):
         _geom(body, material, G.mjGEOM_SPHERE, (0.022,), pos=(x, 0.0, 0.0), condim=6, friction=[1.0, 0.1, 0.005])
-    body.add_geom(
-        type=G.mjGEOM_CAPSULE,
-        fromto=[-0.045, 0, 0, 0.045, 0, 0],
-        size=[0.013, 0.0, 0.0],
-        material=material,
-        group=0,
-        contype=1,
-        conaffinity=1,
-        **CONTACT,
-    )
+    _geom(body, material, G.mjGEOM_CAPSULE, (0.013,), fromto=[-0.045, 0, 0, 0.045, 0, 0])
     return 0.134, 0.044, 0.044
 
 

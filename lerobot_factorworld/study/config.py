@@ -13,6 +13,7 @@ import json
 import logging
 import os
 import re
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -40,17 +41,22 @@ def absolute_path(value: str) -> str:
     return os.path.abspath(os.path.expanduser(value))
 
 
-def resolve_policy_paths(policy: dict[str, Any]) -> dict[str, Any]:
-    """The policy settings with every path-like value (``*_path``, ``*_root``, nested too) made absolute."""
+def map_policy_paths(policy: dict[str, Any], convert: Callable[[str], str]) -> dict[str, Any]:
+    """The policy settings with ``convert`` applied to every path-like value (``*_path``, ``*_root``, nested too)."""
     out: dict[str, Any] = {}
     for name, value in policy.items():
         if isinstance(value, dict):
-            out[name] = resolve_policy_paths(value)
+            out[name] = map_policy_paths(value, convert)
         elif isinstance(value, str) and value and is_path_setting(name):
-            out[name] = absolute_path(value)
+            out[name] = convert(value)
         else:
             out[name] = value
     return out
+
+
+def resolve_policy_paths(policy: dict[str, Any]) -> dict[str, Any]:
+    """The policy settings with every path-like value made absolute."""
+    return map_policy_paths(policy, absolute_path)
 
 
 def split_flag(arg: str) -> tuple[str, str] | None:
@@ -61,15 +67,20 @@ def split_flag(arg: str) -> tuple[str, str] | None:
     return name, value
 
 
-def resolve_arg_paths(args: list[str]) -> list[str]:
-    """``lerobot-train`` flags with path-like values (``--x.y_path=...``, ``--x.y_root=...``) made absolute."""
+def map_arg_paths(args: list[str], convert: Callable[[str], str]) -> list[str]:
+    """``lerobot-train`` flags with ``convert`` applied to path-like values (``--x.y_path=...``, ``--x.y_root=...``)."""
     out = []
     for arg in args:
         flag = split_flag(arg)
         if flag and flag[1] and is_path_setting(flag[0]):
-            arg = f"--{flag[0]}={absolute_path(flag[1])}"
+            arg = f"--{flag[0]}={convert(flag[1])}"
         out.append(arg)
     return out
+
+
+def resolve_arg_paths(args: list[str]) -> list[str]:
+    """``lerobot-train`` flags with path-like values made absolute."""
+    return map_arg_paths(args, absolute_path)
 
 
 def policy_paths(policy: dict[str, Any], prefix: str = "") -> dict[str, str]:

@@ -14,7 +14,7 @@ from ..datasets.version import DATA_VERSION
 from ..factors.registry import get_factor
 from ..tasks import get_task
 from .conditions import TRAIN_SUITE
-from .config import StudyConfig, is_path_setting, split_flag
+from .config import StudyConfig, map_arg_paths, map_policy_paths
 from .steps import RUN, Step, file_fingerprint, is_done, versions
 
 DEFAULT_WIDTHS = "default"
@@ -125,26 +125,12 @@ def _keyed_path(value: str) -> str:
 
 def keyed_policy(policy: dict[str, Any]) -> dict[str, Any]:
     """Policy settings for the key: every path-like setting naming a file replaced by its content hash."""
-    out: dict[str, Any] = {}
-    for name, value in policy.items():
-        if isinstance(value, dict):
-            out[name] = keyed_policy(value)
-        elif isinstance(value, str) and value and is_path_setting(name):
-            out[name] = _keyed_path(value)
-        else:
-            out[name] = value
-    return out
+    return map_policy_paths(policy, _keyed_path)
 
 
 def keyed_args(args: list[str]) -> list[str]:
     """``lerobot-train`` flags for the key: path-like values naming a file replaced by its content hash."""
-    out = []
-    for arg in args:
-        flag = split_flag(arg)
-        if flag and flag[1] and is_path_setting(flag[0]):
-            arg = f"--{flag[0]}={_keyed_path(flag[1])}"
-        out.append(arg)
-    return out
+    return map_arg_paths(args, _keyed_path)
 
 
 # --- cost model ---------------------------------------------------------------------------------
