@@ -1,6 +1,9 @@
 """Shared fixtures. Rendering is headless (the package defaults MUJOCO_GL to egl before MuJoCo loads)."""
 
 import os
+import subprocess
+import sys
+from pathlib import Path
 
 os.environ.setdefault("MUJOCO_GL", "egl")
 
@@ -22,3 +25,22 @@ def make_env():
     yield _make
     for env in envs:
         env.close()
+
+
+def _run_tool(tool: str, *args: str, timeout: int = 900) -> subprocess.CompletedProcess:
+    """Run one of the venv's console scripts (``lerobot-train``, ``lerobot-eval``, ...) headless; assert it succeeded."""
+    proc = subprocess.run(
+        [str(Path(sys.executable).parent / tool), *args],
+        capture_output=True,
+        text=True,
+        timeout=timeout,
+        env={**os.environ, "MUJOCO_GL": "egl"},
+    )
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    return proc
+
+
+@pytest.fixture
+def run_tool():
+    """Run a venv console script (``lerobot-train``, ``lerobot-eval``) headless and assert it succeeded."""
+    return _run_tool

@@ -8,7 +8,6 @@ RT-1 trains on them and ``lerobot-eval`` reports every condition.
 
 import json
 import math
-import os
 import re
 import subprocess
 import sys
@@ -32,7 +31,6 @@ from lerobot_factorworld.pick.scene import body_name
 from lerobot_factorworld.study.conditions import evaluation_suites
 
 TASK = catalog.PICK_TASK
-BIN = Path(sys.executable).parent
 
 
 def run_expert(env, seed, policy=None, actions=None):
@@ -379,102 +377,73 @@ def test_dataset_records_instruction_target_and_object_set_per_episode(pick_data
 
 
 @pytest.mark.slow
-def test_rt1_trains_across_instructions_and_lerobot_eval_reports_every_condition(pick_dataset, tmp_path):
+def test_rt1_trains_across_instructions_and_lerobot_eval_reports_every_condition(pick_dataset, tmp_path, run_tool):
     root, _ = pick_dataset
-    env = {**os.environ, "MUJOCO_GL": "egl"}
     out = tmp_path / "train"
-    train = subprocess.run(
-        [
-            str(BIN / "lerobot-train"),
-            "--policy.type=rt1",
-            "--policy.preset=small",
-            "--policy.device=cpu",
-            "--policy.push_to_hub=false",
-            "--dataset.repo_id=local/pick",
-            f"--dataset.root={root}",
-            "--steps=4",
-            "--batch_size=2",
-            "--num_workers=0",
-            "--save_freq=4",
-            "--log_freq=2",
-            "--seed=0",
-            f"--output_dir={out}",
-        ],
-        capture_output=True,
-        text=True,
-        timeout=900,
-        env=env,
+    run_tool(
+        "lerobot-train",
+        "--policy.type=rt1",
+        "--policy.preset=small",
+        "--policy.device=cpu",
+        "--policy.push_to_hub=false",
+        "--dataset.repo_id=local/pick",
+        f"--dataset.root={root}",
+        "--steps=4",
+        "--batch_size=2",
+        "--num_workers=0",
+        "--save_freq=4",
+        "--log_freq=2",
+        "--seed=0",
+        f"--output_dir={out}",
     )
-    assert train.returncode == 0, train.stderr[-3000:]
     conditions = ["light", "held_out_phrasings", "held_out_objects"]
-    evaluate = subprocess.run(
-        [
-            str(BIN / "lerobot-eval"),
-            f"--policy.path={out / 'checkpoints/last/pretrained_model'}",
-            "--env.type=factorworld",
-            f"--env.task={TASK}",
-            f"--env.dataset_root={root}",
-            "--env.image_size=48",
-            f"--env.shifts=[{','.join(conditions)}]",
-            "--env.n_test_envs=2",
-            "--env.episode_length=4",
-            "--eval.n_episodes=2",
-            "--eval.batch_size=1",
-            f"--output_dir={tmp_path / 'eval'}",
-        ],
-        capture_output=True,
-        text=True,
-        timeout=900,
-        env=env,
+    run_tool(
+        "lerobot-eval",
+        f"--policy.path={out / 'checkpoints/last/pretrained_model'}",
+        "--env.type=factorworld",
+        f"--env.task={TASK}",
+        f"--env.dataset_root={root}",
+        "--env.image_size=48",
+        f"--env.shifts=[{','.join(conditions)}]",
+        "--env.n_test_envs=2",
+        "--env.episode_length=4",
+        "--eval.n_episodes=2",
+        "--eval.batch_size=1",
+        f"--output_dir={tmp_path / 'eval'}",
     )
-    assert evaluate.returncode == 0, evaluate.stderr[-3000:]
     info = json.loads((tmp_path / "eval" / "eval_info.json").read_text())
     assert set(info["per_group"]) == {"train", *conditions}
     assert all("pc_success" in group for group in info["per_group"].values())
     # The simulation CNN policy trains on it too, conditioned on the instruction's embedding.
-    bc = subprocess.run(
-        [
-            str(BIN / "lerobot-train"),
-            "--policy.type=bc",
-            "--policy.use_language=true",
-            "--policy.device=cpu",
-            "--policy.push_to_hub=false",
-            "--dataset.repo_id=local/pick",
-            f"--dataset.root={root}",
-            "--steps=2",
-            "--batch_size=2",
-            "--num_workers=0",
-            "--save_freq=2",
-            "--seed=0",
-            f"--output_dir={tmp_path / 'bc'}",
-        ],
-        capture_output=True,
-        text=True,
-        timeout=900,
-        env=env,
+    run_tool(
+        "lerobot-train",
+        "--policy.type=bc",
+        "--policy.use_language=true",
+        "--policy.device=cpu",
+        "--policy.push_to_hub=false",
+        "--dataset.repo_id=local/pick",
+        f"--dataset.root={root}",
+        "--steps=2",
+        "--batch_size=2",
+        "--num_workers=0",
+        "--save_freq=2",
+        "--seed=0",
+        f"--output_dir={tmp_path / 'bc'}",
     )
-    assert bc.returncode == 0, bc.stderr[-3000:]
-    bc_eval = subprocess.run(
-        [
-            str(BIN / "lerobot-eval"),
-            f"--policy.path={tmp_path / 'bc' / 'checkpoints/last/pretrained_model'}",
-            "--env.type=factorworld",
-            f"--env.task={TASK}",
-            f"--env.dataset_root={root}",
-            "--env.image_size=48",
-            "--env.shifts=[held_out_phrasings]",
-            "--env.n_test_envs=2",
-            "--env.episode_length=4",
-            "--eval.n_episodes=2",
-            "--eval.batch_size=1",
-            f"--output_dir={tmp_path / 'bc_eval'}",
-        ],
-        capture_output=True,
-        text=True,
-        timeout=900,
-        env=env,
+    run_tool(
+        "lerobot-eval",
+        f"--policy.path={tmp_path / 'bc' / 'checkpoints/last/pretrained_model'}",
+        "--env.type=factorworld",
+        f"--env.task={TASK}",
+        f"--env.dataset_root={root}",
+        "--env.image_size=48",
+        "--env.shifts=[held_out_phrasings]",
+        "--env.n_test_envs=2",
+        "--env.episode_length=4",
+        "--eval.n_episodes=2",
+        "--eval.batch_size=1",
+        f"--output_dir={tmp_path / 'bc_eval'}",
     )
-    assert bc_eval.returncode == 0, bc_eval.stderr[-3000:]
     groups = json.loads((tmp_path / "bc_eval" / "eval_info.json").read_text())["per_group"]
     assert set(groups) == {"train", "held_out_phrasings"}
 
