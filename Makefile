@@ -20,15 +20,18 @@ demo: setup
 contact-sheet: setup
 	$(BIN)/factorworld contact-sheet --task=pick-place --out=outputs/contact_sheet.png
 
-# The whole suite (real MuJoCo scenes, real lerobot-eval), on all cores.
-test: setup
+# Lint (style, the import-layer contract), then the whole suite (real MuJoCo scenes, real lerobot-eval), on all cores.
+test: lint
 	$(BIN)/pytest -n auto -q
 
 test-fast: setup
 	$(BIN)/pytest -n auto -q -m "not slow"
 
+# ruff (with import-outside-toplevel) and import-linter's layer contract (pyproject.toml): a new upward import,
+# a cycle, or an unexplained import inside a function fails here.
 lint: setup
 	$(BIN)/ruff check .
+	$(BIN)/lint-imports
 
 bench: setup
 	$(BIN)/python scripts/bench_env.py

@@ -10,7 +10,7 @@ Commands:
     rt1-presets     the RT-1 presets and their parameter counts
     study           the generalization-gap study: collect, train, evaluate, report (--config=FILE.yaml, --dry-run)
 
-Every command reads its settings with :func:`lerobot_factorworld.cli_errors.parse_config` (draccus +
+Every command reads its settings with :func:`lerobot_factorworld.core.settings.parse_config` (draccus +
 the config's ``__post_init__`` validation), so a bad setting ends in one ``error: ...`` line naming the
 valid choices (exit status 2) before any work starts; see that module for how to add a command.
 """
@@ -22,9 +22,15 @@ import typing
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
-from .cli_errors import SettingError, one_line, parse_config
-from .factors.sampling import SamplingOptions
-from .validation import check_at_least, check_factors, check_output_file, check_seed, check_split, check_tasks
+from .contact_sheet import ContactSheetConfig, render_contact_sheet
+from .core.checks import check_at_least, check_output_file, check_seed
+from .core.settings import SettingError, one_line, parse_config
+from .core.splits import check_split
+from .factors.registry import FACTORS, PAPER_STUDY_FACTORS, check_factors, support_matrix_markdown
+from .factors.values import save_configs
+from .protocol.sampling import SamplingOptions, sample_configs
+from .scene.cameras import CAMERAS
+from .tasks import TASKS, check_tasks
 
 SETTING_ERROR_STATUS = 2  # like argparse: the command line was wrong, nothing was done
 FAILURE_STATUS = 1  # the settings were valid but the work was refused or failed
@@ -54,8 +60,6 @@ class SampleConfig:
     sampling: SamplingOptions = field(default_factory=SamplingOptions)
 
     def __post_init__(self) -> None:
-        from .factors.registry import PAPER_STUDY_FACTORS
-
         (self.task,) = check_tasks([self.task])
         check_at_least("n", self.n, 1)
         check_seed(self.seed)
@@ -72,16 +76,12 @@ def no_settings(command: str, args: list[str]) -> None:
 
 def cmd_tasks(args: list[str]) -> None:
     no_settings("tasks", args)
-    from .tasks import TASKS
-
     for task in TASKS.values():
         print(f"{task.name:28s} {task.gym_id:40s} {task.instruction}")
 
 
 def cmd_factors(args: list[str]) -> None:
     no_settings("factors", args)
-    from .factors.registry import FACTORS, support_matrix_markdown
-
     print("| factor | paper name | kind | visual | ranges |\n|---|---|---|---|---|")
     for spec in FACTORS.values():
         ranges = "; ".join(f"{w}: {list(lo)} .. {list(hi)}" for w, (lo, hi) in spec.ranges.items()) or spec.asset_kind
@@ -89,8 +89,6 @@ def cmd_factors(args: list[str]) -> None:
     print("\nSupport matrix (— = the factor cannot apply to the task; requesting it raises an error):\n")
     print(support_matrix_markdown())
     print("\nPer-task limits (where the task's scripted expert stays >= 90% successful; ranges are clipped to them):\n")
-    from .tasks import TASKS
-
     for task in TASKS.values():
         for name, (low, high) in task.limits:
             print(f"- {task.name}: {name} in {list(low)} .. {list(high)}")
@@ -98,17 +96,11 @@ def cmd_factors(args: list[str]) -> None:
 
 def cmd_cameras(args: list[str]) -> None:
     no_settings("cameras", args)
-    from .scene.cameras import CAMERAS
-
     for cam in CAMERAS.values():
         print(f"{cam.name:8s} pos={cam.pos} target={cam.target} fovy={cam.fovy}")
 
 
 def cmd_sample(args: list[str]) -> None:
-    from .factors.registry import PAPER_STUDY_FACTORS
-    from .factors.sampling import sample_configs
-    from .factors.values import save_configs
-
     cfg = parse_config(SampleConfig, args, "sample")
     configs = sample_configs(cfg.task, cfg.n, cfg.seed, cfg.split, cfg.factors or PAPER_STUDY_FACTORS, cfg.sampling)
     for config in configs:
@@ -118,14 +110,12 @@ def cmd_sample(args: list[str]) -> None:
 
 
 def cmd_contact_sheet(args: list[str]) -> None:
-    from .contact_sheet import ContactSheetConfig, render_contact_sheet
-
     cfg = parse_config(ContactSheetConfig, args, "contact-sheet")
     print(f"wrote {render_contact_sheet(cfg)}")
 
 
 def cmd_collect(args: list[str]) -> None:
-    from .datasets.collect import CollectConfig, collect
+    from .datasets.collect import CollectConfig, collect  # noqa: PLC0415  imports LeRobot (~2.5 s): only when collecting
 
     cfg = parse_config(CollectConfig, args, "collect")
     report = collect(cfg)
@@ -136,7 +126,7 @@ def cmd_collect(args: list[str]) -> None:
 
 def cmd_rt1_presets(args: list[str]) -> None:
     no_settings("rt1-presets", args)
-    from .policies.rt1.presets import preset_table
+    from .policies.rt1.presets import preset_table  # noqa: PLC0415  imports torch and LeRobot (~4 s)
 
     print(preset_table())
 
@@ -145,8 +135,9 @@ STUDY_FLAG_ALIASES = {"--config": "--config_path", "--dry-run": "--dry_run=true"
 
 
 def cmd_study(args: list[str]) -> None:
-    from .study.config import StudyConfig
-    from .study.runner import run_study
+    # LeRobot and torch (~4 s): `factorworld tasks` and friends stay instant
+    from .study.config import StudyConfig  # noqa: PLC0415
+    from .study.runner import run_study  # noqa: PLC0415
 
     command = "factorworld study " + " ".join(args)
     cfg = parse_config(StudyConfig, [_study_alias(arg) for arg in args], "study")

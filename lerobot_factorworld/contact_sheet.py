@@ -10,22 +10,18 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
+from PIL import Image, ImageDraw
 from tqdm import tqdm
 
+from .core.checks import check_at_least, check_image_size, check_output_file, check_seed
+from .core.splits import check_split
+from .envs.factor_env import FactorWorldEnv
 from .factors.registry import FACTORS, supported_factors
-from .factors.sampling import SamplingOptions, factor_rng, sample_factor
 from .factors.values import FactorValues, SceneConfig
-from .tasks import get_task
-from .validation import (
-    check_at_least,
-    check_cameras,
-    check_image_size,
-    check_output_file,
-    check_quality,
-    check_seed,
-    check_split,
-    check_tasks,
-)
+from .protocol.sampling import SamplingOptions, factor_rng, sample_factor
+from .scene.build import check_quality
+from .scene.cameras import check_cameras
+from .tasks import check_tasks, get_task
 
 LABEL_WIDTH = 150
 IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg", ".webp")  # formats PIL writes from an RGB image
@@ -85,10 +81,6 @@ def contact_sheet_rows(cfg: ContactSheetConfig) -> list[tuple[str, list[SceneCon
 
 
 def render_contact_sheet(cfg: ContactSheetConfig) -> Path:
-    from PIL import Image, ImageDraw
-
-    from .envs.factor_env import FactorWorldEnv
-
     rows = contact_sheet_rows(cfg)
     size = cfg.image_size
     sheet = Image.new("RGB", (LABEL_WIDTH + size * cfg.n_values, size * len(rows)), "white")

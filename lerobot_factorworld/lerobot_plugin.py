@@ -5,9 +5,9 @@ Imported by LeRobot's plugin discovery (distribution ``lerobot_env_factorworld``
 importing LeRobot costs seconds.
 """
 
-from .envs.configs import FactorWorldEnvConfig
+from .adapters.env_config import FactorWorldEnvConfig
 from .policies.bc.configuration_bc import BCConfig
-from .policies.rt1 import processor_rt1  # noqa: F401  (registers the rt1_language_embedding step)
+from .policies.common import language  # noqa: F401  (registers the rt1_language_embedding step)
 from .policies.rt1.configuration_rt1 import RT1Config
 
 __all__ = ["BCConfig", "FactorWorldEnvConfig", "RT1Config"]

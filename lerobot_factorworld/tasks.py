@@ -7,9 +7,10 @@ act on every task and not only on pick-place.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 
-from .pick import catalog as _pick
+from .core.checks import split_list
 
 
 @dataclass(frozen=True)
@@ -40,11 +41,13 @@ class TaskSpec:
             samples; ``None`` keeps Meta-World's goal at the centre of its range.
         success_radius: Object-to-goal distance (metres) that counts as success, replacing Meta-World's
             threshold; only for tasks whose success test is ``obj_to_target <= radius``.
-        family: A task family with its own scene content (``pick``: several named objects, one
-            instruction per episode, :mod:`lerobot_factorworld.pick`); empty for a Meta-World task.
+        family: The task family's name (``pick``: several named objects, one instruction per episode);
+            empty for a plain Meta-World task.
+        family_entry_point: Where the family's :class:`~lerobot_factorworld.families.TaskFamily` object
+            lives (``"module:attr"``, loaded by :func:`lerobot_factorworld.families.family_of`); empty for
+            a plain Meta-World task.
         metaworld_base: The Meta-World task whose scene and env class the family builds on (empty: the
             task's own name).
-        lookalike_families: More shape families no distractor is drawn from (a family's objects).
         unsupported: ``(factor, reason)`` pairs: factors that do not apply to this task, and why.
     """
 
@@ -60,8 +63,8 @@ class TaskSpec:
     goal: tuple[float, float, float] | None = None
     success_radius: float | None = None
     family: str = ""
+    family_entry_point: str = ""
     metaworld_base: str = ""
-    lookalike_families: tuple[str, ...] = ()
     unsupported: tuple[tuple[str, str], ...] = ()
 
     def limit(self, factor: str) -> tuple[tuple[float, ...], tuple[float, ...]] | None:
@@ -133,17 +136,25 @@ _ROWS = (
     TaskSpec("window-close", "slide the window closed", ("window",)),
     TaskSpec("window-open", "slide the window open", ("window",)),
     # Language-conditioned picking among several objects (the paper's real-robot task), on pick-place's
-    # table; every fact about it lives in lerobot_factorworld/pick/catalog.py.
+    # table: the family plug-in lerobot_factorworld/pick/ (its catalog reads this row's facts).
     TaskSpec(
-        _pick.PICK_TASK,
-        _pick.DEFAULT_INSTRUCTION,
+        "pick",
+        "pick up the named object",  # shown by `factorworld tasks`; every episode gets its own instruction
         (),
         True,
-        max_episode_steps=_pick.MAX_EPISODE_STEPS,
+        # The scripted expert needs about 80 steps (docs/pick.md's expert table: 80-86 on average).
+        max_episode_steps=200,
         family="pick",
+        family_entry_point="lerobot_factorworld.pick.family:PICK_FAMILY",
         metaworld_base="pick-place",
-        lookalike_families=_pick.LOOKALIKE_FAMILIES,
-        unsupported=_pick.UNSUPPORTED_FACTORS,
+        unsupported=tuple(
+            (
+                factor,
+                "pick objects are told apart by shape family and colour, which the instruction names; "
+                "resizing or reshaping them would change what the instruction refers to",
+            )
+            for factor in ("object_size", "object_shape")
+        ),
     ),
 )
 
@@ -157,3 +168,14 @@ def get_task(name: str) -> TaskSpec:
     if key not in TASKS:
         raise ValueError(f"unknown task {name!r}; valid tasks: {', '.join(TASKS)}")
     return TASKS[key]
+
+
+def check_tasks(task: str | Sequence[str] | None) -> list[str]:
+    """Task names (comma-separated) -> canonical names; at least one, each once."""
+    names = [get_task(name).name for name in split_list(task)]
+    if not names:
+        raise ValueError(f"no task given; valid tasks: {', '.join(TASKS)}")
+    duplicates = sorted({n for n in names if names.count(n) > 1})
+    if duplicates:
+        raise ValueError(f"task(s) {', '.join(duplicates)} given more than once")
+    return names

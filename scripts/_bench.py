@@ -8,17 +8,23 @@ Two ways to run a measurement outside the reporting process:
   JSON, its stdout routed to our stderr so that the report stays clean (``bench_collect.py``); plain
   commands (``bench_bc.py`` collecting its datasets) go through :func:`run_command` the same way.
 
-Every script ends its report with :func:`ratio_line` (``ratio: <float>``, parsed by the tests).
+The policy benchmarks (``bench_policy.py``, ``bench_bc.py``) time torch policies with :class:`Clock`,
+:func:`optimizer_step` and :func:`select_action_latencies`. Reports print markdown tables with
+:func:`print_table`; every script ends its report with :func:`ratio_line` (``ratio: <float>``, parsed by the
+tests).
 """
 
 from __future__ import annotations
 
+import argparse
+import functools
 import json
 import os
 import subprocess
 import sys
+import time
 import traceback
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -45,6 +51,28 @@ def round_order[T](items: Sequence[T], round_index: int) -> list[T]:
 
 def ratio_line(ratio: float) -> str:
     return f"ratio: {ratio:.4f}"
+
+
+def target_verdict(ratio: float, target: float) -> str:
+    """``meets the >= 5x target`` or ``BELOW the >= 5x target``."""
+    return f"{'meets' if ratio >= target else 'BELOW'} the >= {target:g}x target"
+
+
+def parse_names(parser: argparse.ArgumentParser, text: str, valid: Sequence[str], what: str) -> list[str]:
+    """The comma-separated names in ``text``, in order and without repeats; ``parser.error`` lists unknown ones."""
+    names = list(dict.fromkeys(name.strip() for name in text.split(",") if name.strip()))
+    unknown = [name for name in names if name not in valid]
+    if unknown:
+        parser.error(f"unknown {what} {', '.join(unknown)}; valid: {', '.join(valid)}")
+    return names
+
+
+def print_table(header: str, rows: Iterable[str]) -> None:
+    """A markdown table: ``header`` (``| a | b |``), a rule as wide as each of its cells, then ``rows``."""
+    print(header)
+    print("|" + "|".join("-" * len(cell) for cell in header.split("|")[1:-1]) + "|")
+    for row in rows:
+        print(row)
 
 
 def load_average_line(start: tuple[float, float, float], end: tuple[float, float, float]) -> str:
@@ -149,3 +177,78 @@ class PipeWorker:
                 self.process.terminate()
                 self.process.join(timeout=5)
             self.conn.close()
+
+
+# --- torch policies (bench_policy.py, bench_bc.py) ---------------------------------------------------
+# torch is imported inside these functions: bench_env.py's spawned workers and bench_collect.py's children
+# import this module too, and never need torch.
+
+
+def device_kind(device: str) -> str:
+    """``cuda`` for any CUDA device (``cuda``, ``cuda:1``), else ``cpu``: the key of per-device workloads."""
+    return "cuda" if device.startswith("cuda") else "cpu"
+
+
+class Clock:
+    """``time.perf_counter()`` read after the device's queued work is done (CUDA kernels run asynchronously)."""
+
+    def __init__(self, device: str) -> None:
+        self.device = device
+        self._sync: Callable[[], None] = lambda: None
+        if device_kind(device) == "cuda":
+            import torch  # noqa: PLC0415  (see the section comment)
+
+            self._sync = functools.partial(torch.cuda.synchronize, device)
+
+    def __call__(self) -> float:
+        self._sync()
+        return time.perf_counter()
+
+
+def release_device_memory(device: str) -> None:
+    """Hand cached CUDA memory back once a policy is gone, so the next one starts from the same state."""
+    if device_kind(device) == "cuda":
+        import torch  # noqa: PLC0415  (see the section comment)
+
+        torch.cuda.empty_cache()
+
+
+def optimizer_step(policy, optimizer, batch: Mapping[str, Any], grad_clip_norm: float | None = None) -> None:
+    """One update as lerobot-train makes it: forward, backward, gradient clipping (if a norm is given), step,
+    ``zero_grad``. The policy's mode (``train()``) is the caller's to set."""
+    import torch  # noqa: PLC0415  (see the section comment)
+
+    loss, _ = policy.forward(batch)
+    loss.backward()
+    if grad_clip_norm is not None:
+        torch.nn.utils.clip_grad_norm_(policy.parameters(), grad_clip_norm)
+    optimizer.step()
+    optimizer.zero_grad(set_to_none=True)
+
+
+def select_action_latencies(
+    policy,
+    frames: Sequence[Mapping[str, Any]],
+    warmup: int,
+    calls: int,
+    clock: Clock,
+    on_call: Callable[[], None] = lambda: None,
+) -> list[float]:
+    """Milliseconds per ``policy.select_action`` call, one frame at a time (batch of 1), in eval mode.
+
+    After ``policy.reset()``, ``warmup`` untimed calls then ``calls`` timed ones; call ``i`` gets a copy of
+    ``frames[i % len(frames)]``, so consecutive calls see different frames. ``on_call`` runs after every call.
+    """
+    policy.eval()
+    policy.reset()
+    latencies = []
+    for i in range(warmup + calls):
+        batch = dict(frames[i % len(frames)])
+        start = clock()
+        action = policy.select_action(batch)
+        elapsed_ms = (clock() - start) * 1000.0
+        if i >= warmup:
+            assert action.shape[0] == 1, action.shape
+            latencies.append(elapsed_ms)
+        on_call()
+    return latencies

@@ -52,18 +52,34 @@ import shutil  # noqa: E402
 import statistics  # noqa: E402
 import sys  # noqa: E402
 import tempfile  # noqa: E402
-import time  # noqa: E402
 from dataclasses import dataclass, field  # noqa: E402
 from pathlib import Path  # noqa: E402
 
 import torch  # noqa: E402
+from lerobot.datasets import EpisodeAwareSampler  # noqa: E402
+from lerobot.datasets.factory import resolve_delta_timestamps  # noqa: E402
+from lerobot.datasets.lerobot_dataset import LeRobotDataset  # noqa: E402
+from lerobot.policies.act.configuration_act import ACTConfig  # noqa: E402
+from lerobot.policies.factory import make_policy, make_pre_post_processors  # noqa: E402
 from tqdm import tqdm  # noqa: E402
+
+import lerobot_factorworld.lerobot_plugin  # noqa: E402, F401  (registers bc)
+from lerobot_factorworld.policies.bc.backbones import (  # noqa: E402
+    CLIP_VISUAL_PREFIX,
+    R3M_KEY,
+    R3M_PREFIX,
+    clip_rn50_image_tower,
+    r3m_resnet50,
+)
+from lerobot_factorworld.policies.bc.configuration_bc import BCConfig  # noqa: E402
+from lerobot_factorworld.tasks import TASKS  # noqa: E402
 
 TARGET_RATIO = 5.0
 BC_ENCODERS = ("conv", "lite0", "clip_rn50", "r3m_rn50")
 ACT = "act"
 POLICIES = (*BC_ENCODERS, ACT)
 STORAGES = ("video", "image")
+DEVICES = ("cpu", "cuda")
 RATIO_STORAGE = "image"
 WARMUP_STEPS = 2
 WARMUP_CALLS = 3
@@ -142,14 +158,6 @@ def collect_datasets(args: argparse.Namespace, data_dir: Path) -> dict[str, Path
 
 def write_weight_files(out: Path) -> dict[str, Path]:
     """Randomly initialised weights in each frozen ResNet's published layout (speed does not depend on values)."""
-    from lerobot_factorworld.policies.bc.backbones import (
-        CLIP_VISUAL_PREFIX,
-        R3M_KEY,
-        R3M_PREFIX,
-        clip_rn50_image_tower,
-        r3m_resnet50,
-    )
-
     paths = {"clip_rn50": out / "open_clip_pytorch_model.bin", "r3m_rn50": out / "model.pt"}
     clip = {CLIP_VISUAL_PREFIX + k: v for k, v in clip_rn50_image_tower().state_dict().items()}
     torch.save(clip, paths["clip_rn50"])
@@ -159,11 +167,7 @@ def write_weight_files(out: Path) -> dict[str, Path]:
 
 def policy_config(name: str, device: str, weights: dict[str, Path]):
     if name == ACT:
-        from lerobot.policies.act.configuration_act import ACTConfig
-
         return ACTConfig(device=device, pretrained_backbone_weights=None, push_to_hub=False)
-    from lerobot_factorworld.policies.bc.configuration_bc import BCConfig
-
     path = weights.get(name)
     return BCConfig(
         device=device,
@@ -187,8 +191,6 @@ class Trainee:
 
 
 def build_trainee(name: str, device: str, metas: dict, weights: dict[str, Path]) -> Trainee:
-    from lerobot.policies.factory import make_policy, make_pre_post_processors
-
     cfg = policy_config(name, device, weights)
     policy = make_policy(cfg, ds_meta=metas[RATIO_STORAGE])
     preprocessors = {
@@ -202,15 +204,8 @@ def build_trainee(name: str, device: str, metas: dict, weights: dict[str, Path])
 # --- timing ----------------------------------------------------------------------------------------
 
 
-def sync(device: str) -> None:
-    if device.startswith("cuda"):
-        torch.cuda.synchronize(device)
-
-
 def make_loader(dataset, batch_size: int, workers: int, device: str, seed: int):
     """The DataLoader lerobot-train builds (EpisodeAwareSampler, worker options) for a map-style dataset."""
-    from lerobot.datasets import EpisodeAwareSampler
-
     sampler = EpisodeAwareSampler(
         dataset.meta.episodes["dataset_from_index"],
         dataset.meta.episodes["dataset_to_index"],
@@ -238,26 +233,20 @@ def forever(loader):
 
 def time_training(trainee: Trainee, storage: str, dataset, args, device: str, steps: int, bar) -> tuple[float, float]:
     """(data seconds, update seconds) summed over ``steps`` timed steps after ``WARMUP_STEPS`` untimed ones."""
-    policy, pre = trainee.policy, trainee.preprocessors[storage]
+    policy, pre, clock = trainee.policy, trainee.preprocessors[storage], _bench.Clock(device)
     batches = forever(make_loader(dataset, args.batch_size, args.num_workers, device, args.seed))
+    policy.train()  # select_action switched it to eval()
     data_s = update_s = 0.0
     for i in range(WARMUP_STEPS + steps):
-        t0 = time.perf_counter()
+        t0 = clock()
         batch = next(batches)
         for key in trainee.camera_keys:
             if key in batch and batch[key].dtype == torch.uint8:
                 batch[key] = batch[key].to(dtype=torch.float32) / 255.0
         batch = pre(batch)
-        sync(device)
-        t1 = time.perf_counter()
-        policy.train()
-        loss, _ = policy.forward(batch)
-        loss.backward()
-        torch.nn.utils.clip_grad_norm_(policy.parameters(), trainee.grad_clip_norm)
-        trainee.optimizer.step()
-        trainee.optimizer.zero_grad()
-        sync(device)
-        t2 = time.perf_counter()
+        t1 = clock()
+        _bench.optimizer_step(policy, trainee.optimizer, batch, trainee.grad_clip_norm)
+        t2 = clock()
         if i >= WARMUP_STEPS:
             data_s += t1 - t0
             update_s += t2 - t1
@@ -276,42 +265,20 @@ def inference_frames(dataset, pre, device: str) -> list[dict]:
     return frames
 
 
-def time_inference(trainee: Trainee, frames: list[dict], calls: int, device: str, bar) -> list[float]:
-    policy = trainee.policy
-    policy.eval()
-    policy.reset()
-    for i in range(WARMUP_CALLS):
-        policy.select_action(dict(frames[i % len(frames)]))
-    sync(device)
-    latencies = []
-    for i in range(calls):
-        batch = dict(frames[(WARMUP_CALLS + i) % len(frames)])
-        t0 = time.perf_counter()
-        action = policy.select_action(batch)
-        sync(device)
-        latencies.append((time.perf_counter() - t0) * 1000.0)
-        assert action.shape[0] == 1, action.shape
-        bar.update(1)
-    return latencies
-
-
 def workload(name: str, args: argparse.Namespace, device: str) -> tuple[int, int]:
     """(timed training steps per block, timed select_action calls per round)."""
-    kind = "cuda" if device.startswith("cuda") else "cpu"
     if args.quick:
         return QUICK["train_steps"], QUICK["infer_calls"]
-    plan = PLANS[name]
+    plan, kind = PLANS[name], _bench.device_kind(device)
     return args.train_steps or plan.train_steps[kind], args.infer_calls or plan.infer_calls[kind]
 
 
 def bench_device(device: str, args: argparse.Namespace, datasets: dict, weights: dict[str, Path]) -> list[Result]:
-    from lerobot.datasets.factory import resolve_delta_timestamps
-    from lerobot.datasets.lerobot_dataset import LeRobotDataset
-
     metas = {storage: ds.meta for storage, ds in datasets.items()}
     results: dict[tuple[str, str], Result] = {}
     total = sum(
-        args.rounds * (len(STORAGES) * (WARMUP_STEPS + workload(p, args, device)[0]) + workload(p, args, device)[1])
+        args.rounds
+        * (len(STORAGES) * (WARMUP_STEPS + workload(p, args, device)[0]) + WARMUP_CALLS + workload(p, args, device)[1])
         for p in args.policy_list
     )
     with tqdm(total=total, desc=f"bench {device}", unit="step", file=sys.stderr) as bar:
@@ -341,12 +308,13 @@ def bench_device(device: str, args: argparse.Namespace, datasets: dict, weights:
                     res.data_s += data_s
                     res.update_s += update_s
                 bar.set_postfix_str(f"{name} select_action round {r + 1}/{args.rounds}")
-                latencies = time_inference(trainee, frames, calls, device, bar)
+                latencies = _bench.select_action_latencies(
+                    trainee.policy, frames, WARMUP_CALLS, calls, _bench.Clock(device), lambda: bar.update(1)
+                )
                 for storage in STORAGES:
                     results[name, storage].latency_ms += latencies
             del trainee, per_policy, frames
-            if device.startswith("cuda"):
-                torch.cuda.empty_cache()
+            _bench.release_device_memory(device)
     return list(results.values())
 
 
@@ -358,16 +326,17 @@ def print_table(results: list[Result]) -> None:
         f"| {'device':<6} | {'policy':<12} | {'params M (trainable)':>20} | {'storage':<7} | {'batch':>5} "
         f"| {'train samples/s':>15} | {'data %':>6} | {'ms/step':>8} | {'select_action ms median / mean':>30} |"
     )
-    print(header)
-    print("|" + "|".join("-" * len(cell) for cell in header.split("|")[1:-1]) + "|")
-    for res in results:
-        label = "act" if res.policy == ACT else f"bc {res.policy}"
-        latency = f"{statistics.median(res.latency_ms):.2f} / {statistics.mean(res.latency_ms):.2f}"
-        print(
-            f"| {res.device:<6} | {label:<12} | {f'{res.params_m:.2f} ({res.trainable_m:.2f})':>20} "
-            f"| {res.storage:<7} | {res.batch:>5} | {res.rate:>15.1f} | {100 * res.data_share:>5.1f}% "
-            f"| {1000 * res.batch / res.rate:>8.1f} | {latency:>30} |"
-        )
+    _bench.print_table(header, (table_row(res) for res in results))
+
+
+def table_row(res: Result) -> str:
+    label = "act" if res.policy == ACT else f"bc {res.policy}"
+    latency = f"{statistics.median(res.latency_ms):.2f} / {statistics.mean(res.latency_ms):.2f}"
+    return (
+        f"| {res.device:<6} | {label:<12} | {f'{res.params_m:.2f} ({res.trainable_m:.2f})':>20} "
+        f"| {res.storage:<7} | {res.batch:>5} | {res.rate:>15.1f} | {100 * res.data_share:>5.1f}% "
+        f"| {1000 * res.batch / res.rate:>8.1f} | {latency:>30} |"
+    )
 
 
 def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
@@ -389,20 +358,16 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     parser.add_argument("--quick", action="store_true", help="smoke run: 2 demos, conv and act, 1 round, 2 steps")
     args = parser.parse_args(argv)
 
-    policies = [p.strip() for p in args.policies.split(",") if p.strip()]
-    unknown = [p for p in policies if p not in POLICIES]
-    if unknown:
-        parser.error(f"unknown policy(ies) {', '.join(unknown)}; valid: {', '.join(POLICIES)}")
+    policies = _bench.parse_names(parser, args.policies, POLICIES, "policy(ies)")
     if args.quick:
         policies = list(QUICK["policies"])
         args.demos, args.rounds = QUICK["demos"], QUICK["rounds"]
     if "conv" not in policies or ACT not in policies:
         parser.error("--policies must include conv and act (the ratio compares them)")
-    args.policy_list = list(dict.fromkeys(policies))
-    args.device_list = list(dict.fromkeys(d.strip() for d in args.devices.split(",") if d.strip()))
-    bad = [d for d in args.device_list if d not in ("cpu", "cuda")]
-    if bad or not args.device_list:
-        parser.error(f"unknown device(s) {', '.join(bad) or '(none)'}; valid: cpu, cuda")
+    args.policy_list = policies
+    args.device_list = _bench.parse_names(parser, args.devices, DEVICES, "device(s)")
+    if not args.device_list:
+        parser.error(f"no device given; valid: {', '.join(DEVICES)}")
     if "cuda" in args.device_list and not cuda:
         parser.error("--devices cuda requested but CUDA is not available")
     if (
@@ -410,8 +375,6 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
         or min(args.num_workers, args.train_steps, args.infer_calls) < 0
     ):
         parser.error("--demos, --batch-size and --rounds must be >= 1; --num-workers and step counts >= 0")
-    from lerobot_factorworld.tasks import TASKS
-
     if args.task not in TASKS:
         parser.error(f"unknown task {args.task}; valid: {', '.join(TASKS)}")
     return args
@@ -419,8 +382,6 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
 
 def main(argv: list[str] | None = None) -> int:
     args = parse_args(argv)
-    import lerobot_factorworld.lerobot_plugin  # noqa: F401  (registers bc)
-
     work = Path(tempfile.mkdtemp(prefix="bench_bc_"))
     data_dir = Path(args.data).resolve() if args.data else work / "data"
     print(
@@ -431,8 +392,6 @@ def main(argv: list[str] | None = None) -> int:
     )
     try:
         roots = collect_datasets(args, data_dir)
-        from lerobot.datasets.lerobot_dataset import LeRobotDataset
-
         datasets = {s: LeRobotDataset(f"local/bench_bc_{s}", root=roots[s]) for s in STORAGES}
         weights = write_weight_files(work) if set(args.policy_list) & {"clip_rn50", "r3m_rn50"} else {}
         load_start = os.getloadavg()
@@ -465,8 +424,7 @@ def main(argv: list[str] | None = None) -> int:
             print(f"bc conv / ACT training samples/s, {storage} storage, {device}: {ratio:.2f}x")
     device = args.device_list[0]
     ratio = by_key[device, "conv", RATIO_STORAGE].rate / by_key[device, ACT, RATIO_STORAGE].rate
-    verdict = "meets" if ratio >= TARGET_RATIO else "BELOW"
-    print(f"headline ({RATIO_STORAGE} storage, {device}): {ratio:.2f}x ({verdict} the >= {TARGET_RATIO:g}x target)")
+    print(f"headline ({RATIO_STORAGE} storage, {device}): {ratio:.2f}x ({_bench.target_verdict(ratio, TARGET_RATIO)})")
     print(_bench.ratio_line(ratio))
     return 0
 

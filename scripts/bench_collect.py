@@ -109,10 +109,10 @@ def run_metaworld(task: str, demos: int, root: Path, seed: int) -> dict:
     from lerobot.utils.constants import ACTION, OBS_IMAGES, OBS_STATE
     from tqdm import tqdm
 
-    from lerobot_factorworld.datasets.collect import episode_seed, noise_rng
+    from lerobot_factorworld.datasets.collect import episode_seed
     from lerobot_factorworld.datasets.schema import frame_features
     from lerobot_factorworld.envs.factor_env import CONTROL_FPS
-    from lerobot_factorworld.experts import expert_action, expert_policy
+    from lerobot_factorworld.experts import expert_action, expert_policy, noise_rng
     from lerobot_factorworld.tasks import get_task
 
     warnings.filterwarnings("ignore", module=r"gymnasium\..*")  # env-checker chatter about Meta-World's spaces

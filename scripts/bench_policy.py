@@ -12,7 +12,8 @@ What is measured
     * ``train samples/s``: windows of ``n_obs_steps`` (6) frames per second through one full training
       step = ``policy.forward(batch)`` (in ``train()`` mode: crop and photometric augmentation, dropout)
       + ``loss.backward()`` + ``torch.optim.AdamW(policy.parameters(), lr=cfg.optimizer_lr).step()``
-      (``zero_grad(set_to_none=True)`` first). The batch size is per preset and device (below).
+      + ``zero_grad(set_to_none=True)`` (``_bench.optimizer_step``). The batch size is per preset and device
+      (below).
     * ``select_action ms``: wall time of one ``policy.select_action(batch)`` call, i.e. one control step
       with one new frame (batch of 1), median over the timed calls. With ``token_reuse`` ON only the new
       frame goes through the FiLM-EfficientNet + TokenLearner and the window's earlier tokens are reused;
@@ -45,7 +46,6 @@ import argparse
 import os
 import statistics
 import sys
-import time
 from dataclasses import dataclass, field
 
 import _bench
@@ -56,7 +56,8 @@ _bench.add_repo_to_path()
 
 from lerobot.configs import FeatureType, PolicyFeature  # noqa: E402
 
-from lerobot_factorworld.policies.rt1.configuration_rt1 import LANGUAGE_EMBEDDING_KEY, PRESETS, RT1Config  # noqa: E402
+from lerobot_factorworld.policies.common.language import LANGUAGE_EMBEDDING_KEY  # noqa: E402
+from lerobot_factorworld.policies.rt1.configuration_rt1 import PRESETS, RT1Config  # noqa: E402
 from lerobot_factorworld.policies.rt1.modeling_rt1 import RT1Policy  # noqa: E402
 
 IMAGE_KEY = "observation.images.front"
@@ -116,11 +117,6 @@ def build_policy(preset: str, device: str) -> RT1Policy:
     return RT1Policy(cfg).to(device)
 
 
-def sync(device: str) -> None:
-    if device.startswith("cuda"):
-        torch.cuda.synchronize(device)
-
-
 def train_batch(policy: RT1Policy, batch_size: int, device: str) -> dict[str, torch.Tensor]:
     t = policy.config.n_obs_steps
     return {
@@ -131,45 +127,16 @@ def train_batch(policy: RT1Policy, batch_size: int, device: str) -> dict[str, to
     }
 
 
-def train_step(policy: RT1Policy, optimizer: torch.optim.Optimizer, batch: dict[str, torch.Tensor]) -> None:
-    optimizer.zero_grad(set_to_none=True)
-    loss, _ = policy.forward(batch)
-    loss.backward()
-    optimizer.step()
-
-
-def time_training(policy, optimizer, batch, steps: int, device: str, bar: tqdm) -> float:
+def time_training(policy, optimizer, batch, steps: int, clock: _bench.Clock, bar: tqdm) -> float:
     """Seconds for ``steps`` training steps (summed per step, so the progress bar is not timed)."""
     policy.train()  # select_action switches the policy to eval()
     total = 0.0
     for _ in range(steps):
-        sync(device)
-        t0 = time.perf_counter()
-        train_step(policy, optimizer, batch)
-        sync(device)
-        total += time.perf_counter() - t0
+        start = clock()
+        _bench.optimizer_step(policy, optimizer, batch)
+        total += clock() - start
         bar.update(1)
     return total
-
-
-def time_inference(policy, frames, language, reuse: bool, warmup: int, steps: int, device: str, bar) -> list[float]:
-    """Per-call ``select_action`` latencies (ms) for ``steps`` calls after ``reset()`` and ``warmup`` calls."""
-    policy.config.token_reuse = reuse
-    policy.reset()
-    for i in range(warmup):
-        policy.select_action({IMAGE_KEY: frames[i % len(frames)], LANGUAGE_EMBEDDING_KEY: language})
-        bar.update(1)
-    sync(device)
-    latencies = []
-    for i in range(warmup, warmup + steps):
-        batch = {IMAGE_KEY: frames[i % len(frames)], LANGUAGE_EMBEDDING_KEY: language}
-        t0 = time.perf_counter()
-        action = policy.select_action(batch)
-        sync(device)
-        latencies.append((time.perf_counter() - t0) * 1000.0)
-        assert action.shape == (1, ACTION_DIM), action.shape
-        bar.update(1)
-    return latencies
 
 
 def workload(preset: str, args: argparse.Namespace, kind: str) -> tuple[int, int, int]:
@@ -185,8 +152,8 @@ def workload(preset: str, args: argparse.Namespace, kind: str) -> tuple[int, int
 
 
 def bench_preset(preset: str, args: argparse.Namespace, bar: tqdm) -> Result:
-    device, kind = args.device, "cuda" if args.device.startswith("cuda") else "cpu"
-    batch_size, train_steps, infer_steps = workload(preset, args, kind)
+    device, clock = args.device, _bench.Clock(args.device)
+    batch_size, train_steps, infer_steps = workload(preset, args, _bench.device_kind(device))
     torch.manual_seed(args.seed)
     bar.set_postfix_str(f"{preset}: building")
     policy = build_policy(preset, device)
@@ -195,26 +162,29 @@ def bench_preset(preset: str, args: argparse.Namespace, bar: tqdm) -> Result:
 
     optimizer = torch.optim.AdamW(policy.parameters(), lr=cfg.optimizer_lr)
     batch = train_batch(policy, batch_size, device)
-    frames = [torch.rand(1, *IMAGE_SHAPE, device=device) for _ in range(FRAME_POOL)]
     language = torch.randn(1, LANGUAGE_DIM, device=device)
+    frames = [
+        {IMAGE_KEY: torch.rand(1, *IMAGE_SHAPE, device=device), LANGUAGE_EMBEDDING_KEY: language}
+        for _ in range(FRAME_POOL)
+    ]
 
     # Warm-up (untimed): first passes allocate memory / pick kernels; the optimizer creates its state.
     bar.set_postfix_str(f"{preset}: warm-up")
-    time_training(policy, optimizer, batch, 1, device, bar)
+    time_training(policy, optimizer, batch, 1, clock, bar)
     for r in range(args.rounds):
         tag = f"{preset} round {r + 1}/{args.rounds}"
         bar.set_postfix_str(f"{tag} train")
-        seconds = time_training(policy, optimizer, batch, train_steps, device, bar)
+        seconds = time_training(policy, optimizer, batch, train_steps, clock, bar)
         result.train_rates.append(batch_size * train_steps / seconds)
         for reuse in _bench.round_order((True, False), r):
             bar.set_postfix_str(f"{tag} reuse {'ON' if reuse else 'OFF'}")
-            result.latency_ms[reuse] += time_inference(
-                policy, frames, language, reuse, args.warmup, infer_steps, device, bar
+            policy.config.token_reuse = reuse
+            result.latency_ms[reuse] += _bench.select_action_latencies(
+                policy, frames, args.warmup, infer_steps, clock, lambda: bar.update(1)
             )
     policy.config.token_reuse = True
     del policy, optimizer, batch
-    if kind == "cuda":
-        torch.cuda.empty_cache()
+    _bench.release_device_memory(device)
     return result
 
 
@@ -234,10 +204,7 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     parser.add_argument("--quick", action="store_true", help="smoke run: small preset, 1 round, few iterations")
     args = parser.parse_args(argv)
 
-    presets = [p.strip() for p in args.presets.split(",") if p.strip()]
-    unknown = [p for p in presets if p not in PRESETS]
-    if unknown:
-        parser.error(f"unknown preset(s) {', '.join(unknown)}; valid: {', '.join(PRESETS)}")
+    presets = _bench.parse_names(parser, args.presets, list(PRESETS), "preset(s)")
     if args.quick:
         presets = ["small"]
         args.rounds, args.warmup = QUICK["rounds"], QUICK["warmup"]
@@ -245,7 +212,7 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
         presets = [p for p in presets if p not in SLOW_PRESETS]
     if not presets:
         parser.error("no preset left to measure")
-    args.preset_list = list(dict.fromkeys(presets))
+    args.preset_list = presets
     if min(args.rounds, args.warmup) < 1 or min(args.train_steps, args.infer_steps, args.batch_size) < 0:
         parser.error("--rounds and --warmup must be >= 1; step counts and batch size >= 0")
     if args.device.startswith("cuda") and not torch.cuda.is_available():
@@ -255,7 +222,7 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
 
 def main(argv: list[str] | None = None) -> int:
     args = parse_args(argv)
-    kind = "cuda" if args.device.startswith("cuda") else "cpu"
+    kind = _bench.device_kind(args.device)
     device_name = torch.cuda.get_device_name(args.device) if kind == "cuda" else "cpu"
     print(
         f"RT-1 presets {', '.join(args.preset_list)} on {args.device} ({device_name}, "
@@ -278,14 +245,15 @@ def main(argv: list[str] | None = None) -> int:
         f"| {'preset':<7} | {'params (M)':>10} | {'img px':>6} | {'batch':>5} | {'train samples/s':>15} "
         f"| {'ms/train step':>13} | {'select_action ON ms':>19} | {'OFF ms':>8} | {'speedup OFF/ON':>14} |"
     )
-    print(header)
-    print("|" + "|".join("-" * (len(cell)) for cell in header.split("|")[1:-1]) + "|")
-    for res in results:
-        print(
+    _bench.print_table(
+        header,
+        (
             f"| {res.preset:<7} | {res.params_m:>10.2f} | {res.image_size:>6} | {res.batch:>5} "
             f"| {res.train_rate:>15.1f} | {1000.0 * res.batch / res.train_rate:>13.1f} "
             f"| {res.latency(True):>19.2f} | {res.latency(False):>8.2f} | {res.speedup:>13.2f}x |"
-        )
+            for res in results
+        ),
+    )
     print()
     for res in results:
         _, train_steps, infer_steps = workload(res.preset, args, kind)

@@ -25,8 +25,8 @@ from lerobot_factorworld.assets.library import (  # noqa: E402
     PAPER_SPLIT_SIZES,
     SPLITS,
     SPLITS_FILE,
-    builtin_splits_document,
 )
+from lerobot_factorworld.assets.split_document import builtin_splits_document  # noqa: E402
 
 
 def render() -> str:

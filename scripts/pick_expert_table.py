@@ -16,11 +16,11 @@ import time
 
 import numpy as np
 
-from lerobot_factorworld.datasets.collect import noise_rng
 from lerobot_factorworld.envs.factor_env import FactorWorldEnv
-from lerobot_factorworld.experts import expert_action, expert_policy
+from lerobot_factorworld.experts import expert_policy, rollout
 from lerobot_factorworld.factors.registry import supported_factors
-from lerobot_factorworld.factors.sampling import SamplingOptions, sample_configs, shift_configs
+from lerobot_factorworld.pick.sampling import CONDITIONS, language_shift
+from lerobot_factorworld.protocol.sampling import SamplingOptions, sample_configs, shift_configs
 
 TASK = "pick"
 NOISE = 0.002
@@ -31,15 +31,9 @@ def run_cell(configs, episodes: int, object_pos_width: str | None = None) -> tup
     policy = expert_policy(TASK)
     successes, steps = 0, []
     for seed in range(episodes):
-        env.reset(seed=seed)
-        rng, n = noise_rng(seed), 0  # the collection's action-noise stream
-        while n < env._max_episode_steps:
-            _, _, terminated, truncated, info = env.step(expert_action(policy, env.state_observation, rng, NOISE))
-            n += 1
-            if terminated or truncated:
-                break
-        successes += bool(info["is_success"])
-        steps.append(n)
+        episode = rollout(env, policy, seed, NOISE)  # the collection's episode loop and action-noise stream
+        successes += episode.success
+        steps.append(len(episode))
     env.close()
     return successes, float(np.mean(steps))
 
@@ -49,8 +43,6 @@ def cells(n_envs: int, seed: int) -> dict[str, list]:
     out = {"default": base}
     for factor in supported_factors(TASK):
         out[factor] = shift_configs(base, factor, n_envs, seed + 1)
-    from lerobot_factorworld.pick.sampling import CONDITIONS, language_shift
-
     for condition in CONDITIONS:
         out[condition] = language_shift(base, condition, n_envs, seed + 1)
     for k in (3, 6):

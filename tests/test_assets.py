@@ -15,7 +15,7 @@ import pytest
 from PIL import Image
 
 from lerobot_factorworld import assets as A
-from lerobot_factorworld.assets import library
+from lerobot_factorworld.assets import library, split_document
 from lerobot_factorworld.assets.mesh import face_areas, is_watertight, signed_volume
 
 REPO = Path(__file__).resolve().parents[1]
@@ -82,7 +82,7 @@ def test_default_scene_textures_are_metaworlds() -> None:
 
 def test_splits_file_matches_code_and_script_is_deterministic() -> None:
     doc = json.loads(library.SPLITS_FILE.read_text(encoding="utf-8"))
-    assert doc == library.builtin_splits_document(), "run: python scripts/make_asset_splits.py"
+    assert doc == split_document.builtin_splits_document(), "run: python scripts/make_asset_splits.py"
     assert set(doc["splits"]) == {"family", "variant"}
     out = subprocess.run(
         [sys.executable, str(REPO / "scripts" / "make_asset_splits.py"), "--check"],
@@ -167,7 +167,8 @@ def test_splits_file_checks_hold_even_with_a_matching_sha256(
 def _shown_in_compiled_scene(task: str) -> tuple[set[str], set[str], set[str]]:
     """(textures, pool meshes, object textures) on visible geoms, read from the compiled model: an
     independent check of :func:`scene_assets`, which reads the uncompiled spec."""
-    from lerobot_factorworld.scene.build import load_task_spec, metaworld_xml
+    from lerobot_factorworld.assets.scenes import metaworld_xml
+    from lerobot_factorworld.scene.build import load_task_spec
     from lerobot_factorworld.tasks import get_task
 
     spec = get_task(task)
@@ -314,9 +315,9 @@ print(json.dumps(out))
 
 
 def test_same_name_same_asset_in_process_and_cache_is_read_only() -> None:
-    from lerobot_factorworld.assets._rng import stable_seed
     from lerobot_factorworld.assets.shapes import generate_shape
     from lerobot_factorworld.assets.textures import generate_texture
+    from lerobot_factorworld.core.rng import stable_seed
 
     for name in _PROBE_TEXTURES[:3]:
         fresh = generate_texture(name[5:].rsplit("-", 1)[0], stable_seed(name), 128)

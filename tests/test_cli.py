@@ -64,7 +64,7 @@ COLLECT_CASES = [
     (["--image_size=4"], "image_size must be at least 8 pixels (and at most"),
     (["--image_size=100000"], "image_size must be at least 8 pixels (and at most"),
     (["--quality=ultra"], "unknown quality 'ultra'; valid: fast, full"),
-    (["--split=test"], "unknown split 'test'; valid: train, eval"),
+    (["--split=test"], "unknown split 'test'; valid splits: train, eval"),
     (["--seed=-1"], "seed must be at least 0"),
     (["--action_noise=-0.1"], "action_noise must be a finite number >= 0"),
     (["--max_episode_steps=0"], "max_episode_steps must be at least 1"),
@@ -121,7 +121,7 @@ def test_collect_refuses_each_bad_setting_in_one_line(args, expected, yaml_files
 OTHER_CASES = [
     (["sample", "--task=nope"], "unknown task 'nope'; " + VALID_TASKS),
     (["sample", "--n=0"], "n must be at least 1"),
-    (["sample", "--split=holdout"], "unknown split 'holdout'; valid: train, eval"),
+    (["sample", "--split=holdout"], "unknown split 'holdout'; valid splits: train, eval"),
     (["sample", "--seed=-3"], "seed must be at least 0"),
     (["sample", "--factors=[shape]"], "unknown factor(s) 'shape'; valid factors:"),
     (["sample", "--task=basketball", "--factors=[object_shape]"], "factor 'object_shape' does not apply"),
@@ -158,8 +158,8 @@ def test_every_other_command_refuses_bad_settings_in_one_line(argv, expected, ya
 
 def test_the_shipped_configs_parse(tmp_path):
     from lerobot_factorworld.cli import SampleConfig
-    from lerobot_factorworld.cli_errors import parse_config
     from lerobot_factorworld.contact_sheet import ContactSheetConfig
+    from lerobot_factorworld.core.settings import parse_config
     from lerobot_factorworld.datasets.collect import CollectConfig
 
     for cls, name in (

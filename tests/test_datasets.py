@@ -13,7 +13,7 @@ import pytest
 
 from lerobot_factorworld.datasets.collect import CollectConfig, collect, staging_dir
 from lerobot_factorworld.datasets.query import episode_records, select_episodes
-from lerobot_factorworld.factors.sampling import sample_configs
+from lerobot_factorworld.protocol.sampling import sample_configs
 
 FACTORS = ["table_texture", "light", "distractors", "camera_pos"]
 
@@ -283,7 +283,8 @@ def test_action_noise_stream_is_independent_of_the_env_stream(make_env):
     import numpy as np
     from gymnasium.utils.seeding import np_random
 
-    from lerobot_factorworld.datasets.collect import _rollout, episode_seed, noise_rng
+    from lerobot_factorworld.datasets.collect import episode_seed
+    from lerobot_factorworld.experts import noise_rng, rollout
 
     env = make_env("pick-place", cameras=("front",), image_size=8, max_episode_steps=3)
     handed = []
@@ -293,7 +294,7 @@ def test_action_noise_stream_is_independent_of_the_env_stream(make_env):
         return np.zeros(4, dtype=np.float32)
 
     seed = episode_seed(3, 0, 1, 0, 0)
-    frames, _ = _rollout(env, None, seed, 0.002, spy)
+    frames = rollout(env, None, seed, 0.002, act=spy).actions
     assert len(frames) == 3 and all(rng is handed[0] for rng in handed)
     env_rng, _ = np_random(seed)  # what env.reset(seed=seed) seeds the env's own generator with
     assert handed[0].bit_generator.state == noise_rng(seed).bit_generator.state != env_rng.bit_generator.state

@@ -8,7 +8,7 @@ from gymnasium.utils.env_checker import check_env
 import lerobot_factorworld  # noqa: F401  (registers FactorWorld/<task>-v0)
 from lerobot_factorworld import TASKS, FactorValues, SceneConfig
 from lerobot_factorworld.experts import expert_action, expert_policy
-from lerobot_factorworld.factors.sampling import sample_configs
+from lerobot_factorworld.protocol.sampling import sample_configs
 
 
 def test_every_task_is_registered_with_gymnasium():

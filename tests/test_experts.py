@@ -9,10 +9,9 @@ import numpy as np
 import pytest
 
 from lerobot_factorworld import TASKS, FactorValues, SceneConfig
-from lerobot_factorworld.datasets.collect import noise_rng
-from lerobot_factorworld.experts import expert_action, expert_policy
+from lerobot_factorworld.experts import expert_action, expert_policy, rollout
 from lerobot_factorworld.factors.registry import FACTORS, supported_factors
-from lerobot_factorworld.factors.sampling import sample_configs
+from lerobot_factorworld.protocol.sampling import sample_configs
 
 ENVS = 10  # sampled environments per cell
 REQUIRED = 0.9
@@ -23,17 +22,11 @@ VISUAL = [name for name, spec in FACTORS.items() if spec.visual]
 
 
 def run_expert(env, policy, seed, record=False, act=expert_action):
-    """One episode as ``factorworld collect`` runs it: the reset seed, and that seed's own noise stream."""
-    env.reset(seed=seed)
-    rng = noise_rng(seed)
+    """One episode as ``factorworld collect`` runs it (:func:`rollout`); with ``record``, the qpos after each step."""
     states = []
-    for _ in range(env._max_episode_steps):
-        _, _, terminated, truncated, info = env.step(act(policy, env.state_observation, rng, NOISE))
-        if record:
-            states.append(env.data.qpos.copy())
-        if terminated or truncated:
-            break
-    return info["is_success"], states
+    after = (lambda e: states.append(e.data.qpos.copy())) if record else None
+    episode = rollout(env, policy, seed, NOISE, act=act, after_step=after)
+    return episode.success, states
 
 
 @pytest.mark.slow
@@ -63,8 +56,8 @@ def test_visual_factors_leave_physics_unchanged(task, make_env):
     policy = expert_policy(task)
     shifted = sample_configs(task, 1, seed=3, split="eval", factors=VISUAL)[0]
     plain = SceneConfig(task, FactorValues(object_pos=(0.01, 0.01)))
-    if shifted.pick is not None:  # the same objects, poses and named object: only the visual factors differ
-        plain = dataclasses.replace(plain, pick=shifted.pick)
+    if shifted.content is not None:  # the same objects, poses and named object: only the visual factors differ
+        plain = dataclasses.replace(plain, content=shifted.content)
     trajectories = []
     for config in (plain, shifted.with_factors(object_pos=(0.01, 0.01))):
         env = make_env(task, config, cameras=("front",), image_size=32)
@@ -87,12 +80,12 @@ def test_pick_place_expert_leaves_the_puck_on_the_table_goal(make_env):
 
 def test_experts_are_measured_as_the_collector_runs_them(make_env):
     """The rates above are those of ``factorworld collect``: the same actions for the same episode seed."""
-    from lerobot_factorworld.datasets.collect import _rollout, episode_seed
+    from lerobot_factorworld.datasets.collect import _frames, episode_seed
 
     env = make_env("pick-place", cameras=("front",), image_size=8, max_episode_steps=15)
     policy = expert_policy("pick-place")
     seed = episode_seed(0, 0, 0, 0, 0)
-    frames, _ = _rollout(env, policy, seed, NOISE, expert_action)
+    frames = _frames(rollout(env, policy, seed, NOISE), env.task_description)
     actions = []
 
     def recording(*args):

@@ -14,7 +14,7 @@ import lerobot_factorworld
 from lerobot_factorworld import FACTORS, TASKS, FactorValues, SceneConfig, SceneObject, load_configs, save_configs
 from lerobot_factorworld.assets import DEFAULT_TABLE_TEXTURE, asset_family, split_names
 from lerobot_factorworld.assets.scenes import scene_assets, scene_shape_families
-from lerobot_factorworld.factors import registry, sampling, values
+from lerobot_factorworld.factors import registry, values
 from lerobot_factorworld.factors.registry import (
     PAPER_STUDY_FACTORS,
     factor_range,
@@ -22,7 +22,8 @@ from lerobot_factorworld.factors.registry import (
     support_matrix_markdown,
     validate_value,
 )
-from lerobot_factorworld.factors.sampling import SamplingOptions, sample_configs, shift_configs
+from lerobot_factorworld.protocol import sampling
+from lerobot_factorworld.protocol.sampling import SamplingOptions, sample_configs, shift_configs
 from lerobot_factorworld.tasks import get_task
 
 PAPER_FACTORS = (
@@ -246,9 +247,9 @@ _SCENE_LOOKALIKES = {
 
 @pytest.mark.parametrize("task", list(TASKS))
 def test_distractors_never_look_like_anything_the_tasks_scene_shows(task, monkeypatch):
-    from lerobot_factorworld.scene import layout
+    from lerobot_factorworld.protocol import keepout
 
-    monkeypatch.setattr(layout, "keepout_boxes", lambda name: [])  # placement is not under test here: quick
+    monkeypatch.setattr(keepout, "keepout_boxes", lambda name: [])  # placement is not under test here: quick
     shown = set(scene_shape_families(task))
     assert _SCENE_LOOKALIKES.get(task, set()) <= shown
     options = SamplingOptions(n_distractors=5)

@@ -14,7 +14,7 @@ LEROBOT_EVAL = Path(sys.executable).with_name("lerobot-eval")
 
 
 def test_env_config_builds_one_suite_per_condition():
-    from lerobot_factorworld.envs.configs import FactorWorldEnvConfig
+    from lerobot_factorworld.adapters.env_config import FactorWorldEnvConfig
 
     cfg = FactorWorldEnvConfig(
         task="pick-place", shifts=["light", "table_texture+distractors"], n_train_envs=2, n_test_envs=3
@@ -84,7 +84,7 @@ def test_lerobot_eval_runs_a_lerobot_policy_on_factorworld(tmp_path):
     ],
 )
 def test_env_config_refuses_bad_settings_when_parsed(settings, expected):
-    from lerobot_factorworld.envs.configs import FactorWorldEnvConfig
+    from lerobot_factorworld.adapters.env_config import FactorWorldEnvConfig
 
     with pytest.raises((ValueError, FileNotFoundError)) as err:
         FactorWorldEnvConfig(**settings)
@@ -92,9 +92,9 @@ def test_env_config_refuses_bad_settings_when_parsed(settings, expected):
 
 
 def test_env_config_checks_the_configs_file_and_asset_folders(tmp_path):
-    from lerobot_factorworld.envs.configs import FactorWorldEnvConfig
-    from lerobot_factorworld.factors.sampling import SamplingOptions, sample_configs
+    from lerobot_factorworld.adapters.env_config import FactorWorldEnvConfig
     from lerobot_factorworld.factors.values import save_configs
+    from lerobot_factorworld.protocol.sampling import SamplingOptions, sample_configs
 
     path = save_configs(sample_configs("door-open", 2, factors=["light"]), tmp_path / "envs.json")
     assert FactorWorldEnvConfig(task="door-open", configs_path=str(path)).configs_path == str(path)
@@ -128,9 +128,9 @@ def test_lerobot_eval_fails_on_a_bad_env_setting_before_building_a_policy(tmp_pa
 def test_env_config_warns_when_test_environments_cannot_pair_with_training_environments(caplog):
     import logging
 
-    from lerobot_factorworld.envs.configs import FactorWorldEnvConfig
+    from lerobot_factorworld.adapters.env_config import FactorWorldEnvConfig
 
-    with caplog.at_level(logging.WARNING, logger="lerobot_factorworld.envs.configs"):
+    with caplog.at_level(logging.WARNING, logger="lerobot_factorworld.adapters.env_config"):
         FactorWorldEnvConfig(task="door-open", n_train_envs=2, shifts=["light"], n_test_envs=4).suites("door-open")
         assert "not a multiple" not in caplog.text
         FactorWorldEnvConfig(task="door-open", n_train_envs=2, shifts=["light"], n_test_envs=3).suites("door-open")

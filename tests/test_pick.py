@@ -18,33 +18,30 @@ import numpy as np
 import pytest
 
 from lerobot_factorworld import FACTORS, SceneConfig, get_task
-from lerobot_factorworld.datasets.collect import CollectConfig, collect, noise_rng
+from lerobot_factorworld.datasets.collect import CollectConfig, collect
 from lerobot_factorworld.datasets.query import episode_records, select_episodes
-from lerobot_factorworld.experts import expert_action, expert_policy
+from lerobot_factorworld.experts import expert_action, expert_policy, rollout
 from lerobot_factorworld.factors.registry import support_reason, supported_factors
-from lerobot_factorworld.factors.sampling import SamplingOptions, sample_configs, shift_configs
 from lerobot_factorworld.factors.values import load_configs, save_configs
+from lerobot_factorworld.families import family_of
 from lerobot_factorworld.pick import catalog
 from lerobot_factorworld.pick.layout import PickLayout, PlacedObject
 from lerobot_factorworld.pick.sampling import CONDITIONS, language_shift
 from lerobot_factorworld.pick.scene import body_name
-from lerobot_factorworld.study.conditions import evaluation_suites
+from lerobot_factorworld.protocol.conditions import evaluation_suites
+from lerobot_factorworld.protocol.sampling import SamplingOptions, sample_configs, shift_configs
 
 TASK = catalog.PICK_TASK
 
 
 def run_expert(env, seed, policy=None, actions=None):
     """One episode driven by the expert (or by a recorded action list); returns (info, actions)."""
-    policy = policy or expert_policy(TASK)
-    env.reset(seed=seed)
-    rng, taken = noise_rng(seed), []
-    for step in range(env._max_episode_steps):
-        action = expert_action(policy, env.state_observation, rng, 0.002) if actions is None else actions[step]
-        taken.append(action)
-        _, _, terminated, truncated, info = env.step(action)
-        if terminated or truncated or (actions is not None and step + 1 == len(actions)):
-            break
-    return info, taken
+    if actions is None:
+        episode = rollout(env, policy or expert_policy(TASK), seed, 0.002)
+    else:  # replay: the recorded actions, one per step, then stop
+        replay = iter(actions)
+        episode = rollout(env, None, seed, act=lambda *_: next(replay), max_steps=len(actions))
+    return episode.info, episode.actions
 
 
 # --- the catalogue: one source of truth, splits -------------------------------------------------------------
@@ -65,7 +62,10 @@ def test_held_out_objects_and_phrasings_are_disjoint_seeded_splits_covering_ever
 
 def test_the_task_row_and_support_matrix_derive_from_the_catalogue():
     task = get_task(TASK)
-    assert task.max_episode_steps == catalog.MAX_EPISODE_STEPS and task.lookalike_families == catalog.LOOKALIKE_FAMILIES
+    assert (
+        task.max_episode_steps == catalog.MAX_EPISODE_STEPS
+        and family_of(task).lookalike_families(task) == catalog.LOOKALIKE_FAMILIES
+    )
     expected = {
         "object_pos",
         "arm_pos",
@@ -87,7 +87,7 @@ def test_catalogue_sizes_match_the_compiled_objects(make_env):
     """``half_height`` and ``footprint`` (used by layouts, keep-out and the expert) are the real geometry."""
     names = ["red_cube", "blue_can", "green_ball", "yellow_mug", "purple_bar", "white_dumbbell"]
     layout = PickLayout(tuple(PlacedObject(n, *catalog.SLOTS[i]) for i, n in enumerate(names)))
-    env = make_env(TASK, SceneConfig(TASK, pick=layout), cameras=())
+    env = make_env(TASK, SceneConfig(TASK, content=layout), cameras=())
     env.reset(seed=0, options={"factors": {"object_pos": (0.0, 0.0)}})
     m, d = env.model, env.data
     for item in layout.objects:
@@ -133,11 +133,11 @@ def test_instructions_name_exactly_one_object_of_the_scene_and_carry_no_factor_v
 
 
 def test_a_pick_configuration_takes_no_free_form_instruction_and_validates_its_layout():
-    layout = sample_configs(TASK, 1, seed=0, factors=())[0].pick
+    layout = sample_configs(TASK, 1, seed=0, factors=())[0].content
     with pytest.raises(ValueError, match="instruction comes from its layout"):
-        SceneConfig(TASK, instruction="pick up the red cube light=0.3", pick=layout)
+        SceneConfig(TASK, instruction="pick up the red cube light=0.3", content=layout)
     with pytest.raises(ValueError, match="takes no pick layout"):
-        SceneConfig("pick-place", pick=layout)
+        SceneConfig("pick-place", content=layout)
     a, b = layout.objects[:2]
     with pytest.raises(ValueError, match="differ in colour"):
         replace(
@@ -166,7 +166,7 @@ def test_gymnasium_env_checker_passes_on_pick():
 
 def test_configurations_round_trip_through_json_and_give_the_same_episodes(tmp_path, make_env):
     configs = sample_configs(TASK, 3, seed=2, options=SamplingOptions(n_objects=5))
-    assert all(len(c.pick.objects) == 5 for c in configs)
+    assert all(len(c.content.objects) == 5 for c in configs)
     path = save_configs(configs, tmp_path / "envs.json")
     assert load_configs(path) == configs and json.loads(path.read_text())[0]["pick"]["objects"]
     records = []
@@ -184,7 +184,7 @@ def test_held_out_objects_and_phrasings_never_appear_in_training_environments(ma
     train_objects, train_templates = set(catalog.split_objects("train")), set(catalog.split_templates("train"))
     configs = sample_configs(TASK, 40, seed=1)
     for config in configs:
-        assert set(config.pick.names) <= train_objects and config.pick.phrasings == "train"
+        assert set(config.content.names) <= train_objects and config.content.phrasings == "train"
     env = make_env(TASK, configs, cameras=(), scene_cache_size=1)
     episodes = [env.reset(seed=s)[1]["pick"] for s in range(60)]
     assert {e["template"] for e in episodes} <= train_templates
@@ -200,7 +200,7 @@ def test_held_out_objects_and_phrasings_never_appear_in_training_environments(ma
             else:
                 assert record["template"] in catalog.split_templates("eval")
     # the phrasing condition keeps everything else: same scene, same target per seed
-    assert [c.pick.objects for c in held["held_out_phrasings"]] == [c.pick.objects for c in configs[:4]]
+    assert [c.content.objects for c in held["held_out_phrasings"]] == [c.content.objects for c in configs[:4]]
     train_env = make_env(TASK, configs[:4], cameras=(), scene_cache_size=1)
     phrased_env = make_env(TASK, held["held_out_phrasings"], cameras=(), scene_cache_size=1)
     for s in range(8):
@@ -230,8 +230,8 @@ def test_episodes_are_paired_across_conditions_even_when_a_shift_pins_the_object
 
 def test_success_is_judged_on_the_named_object_and_lifting_another_fails(make_env):
     base = sample_configs(TASK, 1, seed=4, factors=())[0]
-    first, second = base.pick.names[:2]
-    pinned = {name: replace(base, pick=replace(base.pick, target=name)) for name in (first, second)}
+    first, second = base.content.names[:2]
+    pinned = {name: replace(base, content=replace(base.content, target=name)) for name in (first, second)}
     env = make_env(TASK, list(pinned.values()), cameras=())
     info, lift_first = run_expert(env, seed=0)  # seed 0 -> environment 0: `first` is named
     assert info["is_success"] and info["pick"]["target"] == first
@@ -296,7 +296,7 @@ def test_object_texture_keeps_each_objects_colour(make_env):
     env = make_env(TASK, config, cameras=())
     env.reset(seed=0)
     m = env.model
-    for name in config.pick.names:
+    for name in config.content.names:
         material = m.geom_matid[m.body_geomadr[m.body(body_name(name)).id]]
         tex = m.mat_texid[material, 1]
         assert tex >= 0, "textured"
@@ -458,7 +458,7 @@ def test_the_collect_config_file_parses():
 
 
 def test_lerobot_env_config_refuses_language_conditions_outside_the_pick_family():
-    from lerobot_factorworld.envs.configs import FactorWorldEnvConfig
+    from lerobot_factorworld.adapters.env_config import FactorWorldEnvConfig
 
     with pytest.raises(ValueError, match="applies to the pick family only"):
         FactorWorldEnvConfig(task="door-open", shifts=["held_out_objects"])

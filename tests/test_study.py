@@ -12,8 +12,9 @@ from pathlib import Path
 
 import pytest
 
-from lerobot_factorworld.study import metrics
-from lerobot_factorworld.study.conditions import coverage, evaluation_suites
+from lerobot_factorworld.protocol.conditions import evaluation_suites
+from lerobot_factorworld.protocol.coverage import coverage
+from lerobot_factorworld.study import metrics, paper
 
 ROOT = Path(__file__).resolve().parents[1]
 FACTORWORLD = Path(sys.executable).with_name("factorworld")
@@ -60,15 +61,16 @@ def test_pair_metric_interaction_mean_se_and_spearman():
     assert metrics.rank_hardest_first({"a": 0.3, "b": 0.1, "c": 0.3}) == {"a": 1.5, "c": 1.5, "b": 3.0}
     # 1 - 6 * (0 + 1 + 1) / (3 * 8) = 0.5
     assert metrics.spearman({"a": 1, "b": 2, "c": 3}, {"a": 1, "b": 3, "c": 2}) == pytest.approx(0.5)
-    paper_order = sorted(metrics.PAPER_FACTOR_RANKS, key=metrics.PAPER_FACTOR_RANKS.get)
+    paper_order = sorted(paper.PAPER_FACTOR_RANKS, key=paper.PAPER_FACTOR_RANKS.get)
     reverse = {f: float(len(paper_order) - i) for i, f in enumerate(paper_order)}
-    assert metrics.spearman(reverse, metrics.PAPER_FACTOR_RANKS) < -0.9
+    assert metrics.spearman(reverse, paper.PAPER_FACTOR_RANKS) < -0.9
     assert math.isnan(metrics.spearman({"a": 1, "b": 2}, {"a": 1, "b": 2}))
 
 
 def test_the_pairs_section_counts_cells_whose_pair_metric_is_undefined():
     from lerobot_factorworld.study.config import StudyConfig
-    from lerobot_factorworld.study.report import DEFAULT_WIDTHS, _pairs_section
+    from lerobot_factorworld.study.markdown import _pairs_section
+    from lerobot_factorworld.study.plan import DEFAULT_WIDTHS
 
     cfg = StudyConfig(tasks=["door-open"], factors=["light", "camera_pos"], pairs=["light+camera_pos"], seeds=[0, 1])
 
@@ -99,8 +101,9 @@ def test_the_pairs_section_counts_cells_whose_pair_metric_is_undefined():
 
 
 def test_a_pick_study_report_sets_success_next_to_the_papers_real_robot_table():
+    from lerobot_factorworld.pick.report import real_robot_section as _real_robot_section
     from lerobot_factorworld.study.config import StudyConfig
-    from lerobot_factorworld.study.report import DEFAULT_WIDTHS, _real_robot_section
+    from lerobot_factorworld.study.plan import DEFAULT_WIDTHS
 
     cfg = StudyConfig(
         tasks=["pick"],
@@ -180,7 +183,7 @@ def _run_episodes(env_cfg, batch_size: int, episodes: int, start_seed: int = 100
 
 
 def test_episodes_visit_every_environment_equally_and_pair_object_starts(caplog):
-    from lerobot_factorworld.envs.configs import FactorWorldEnvConfig
+    from lerobot_factorworld.adapters.env_config import FactorWorldEnvConfig
 
     cfg = FactorWorldEnvConfig(
         task="handle-press", n_train_envs=2, train_factors=["light"], shifts=["light"], n_test_envs=4, image_size=16
@@ -194,13 +197,13 @@ def test_episodes_visit_every_environment_equally_and_pair_object_starts(caplog)
     assert coverage(range(1000, 1008), 4).equal
     partial = coverage(range(1000, 1003), 4)
     assert not partial.equal and partial.visited == 3 and "3 of its 4 environments" in partial.describe("light")
-    with caplog.at_level(logging.WARNING, logger="lerobot_factorworld.study.conditions"):
+    with caplog.at_level(logging.WARNING, logger="lerobot_factorworld.protocol.coverage"):
         _run_episodes(replace(cfg, include_train=False), batch_size=1, episodes=3)
     assert "visit 3 of its 4 environments" in caplog.text
 
 
 def test_coverage_of_batched_resets_does_not_count_lerobot_evals_padding_as_scored():
-    from lerobot_factorworld.study.conditions import reset_coverage
+    from lerobot_factorworld.protocol.coverage import reset_coverage
 
     # 15 episodes in batches of 10 reset 20 seeds; only the first 15 are scored: never claim "equal"
     unequal, message = reset_coverage(range(1000, 1020), 10, 10, "light")
@@ -246,7 +249,7 @@ workers: 2
 
 
 def _toy_config(out: Path, executor: str = "local"):
-    from lerobot_factorworld.cli_errors import parse_config
+    from lerobot_factorworld.core.settings import parse_config
     from lerobot_factorworld.study.config import StudyConfig
 
     path = out.parent / f"{out.name}.yaml"
@@ -268,7 +271,7 @@ def toy(tmp_path_factory):
 def test_toy_study_end_to_end(toy):
     import csv
 
-    from lerobot_factorworld.study.report import RESULT_COLUMNS
+    from lerobot_factorworld.study.results import RESULT_COLUMNS
 
     cfg, outcome = toy
     assert not outcome.failed, outcome.failed
@@ -329,8 +332,8 @@ def test_changing_one_setting_changes_only_the_steps_that_depend_on_it(tmp_path)
 
 @pytest.mark.slow
 def test_dataset_gives_the_training_condition_and_mismatches_are_refused(toy):
-    from lerobot_factorworld.envs.configs import FactorWorldEnvConfig
-    from lerobot_factorworld.factors.sampling import sample_configs
+    from lerobot_factorworld.adapters.env_config import FactorWorldEnvConfig
+    from lerobot_factorworld.protocol.sampling import sample_configs
     from lerobot_factorworld.study.plan import make_plan
     from lerobot_factorworld.study.steps import read_result
 
@@ -398,7 +401,7 @@ def test_cli_dry_run_and_one_line_errors(tmp_path):
 
 @pytest.mark.parametrize("name", ["quick.yaml", "paper.yaml", "two_tasks.yaml"])
 def test_study_configs_parse_and_plan(name):
-    from lerobot_factorworld.cli_errors import parse_config
+    from lerobot_factorworld.core.settings import parse_config
     from lerobot_factorworld.study.config import StudyConfig
     from lerobot_factorworld.study.plan import make_plan
 
@@ -407,7 +410,7 @@ def test_study_configs_parse_and_plan(name):
 
 
 def test_paper_config_is_the_papers_grid():
-    from lerobot_factorworld.cli_errors import parse_config
+    from lerobot_factorworld.core.settings import parse_config
     from lerobot_factorworld.factors.registry import PAPER_STUDY_FACTORS
     from lerobot_factorworld.study.config import StudyConfig
     from lerobot_factorworld.study.plan import make_plan, radius_of

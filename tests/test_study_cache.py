@@ -121,7 +121,7 @@ def test_relative_weights_path_is_resolved_and_keyed_by_its_content(tmp_path, mo
 
 def test_missing_weights_file_is_refused_before_any_step_runs(tmp_path, monkeypatch, capsys):
     from lerobot_factorworld.cli import main
-    from lerobot_factorworld.study.plan import describe
+    from lerobot_factorworld.study.cost import describe
     from lerobot_factorworld.study.runner import run_study
 
     monkeypatch.chdir(tmp_path)
@@ -220,7 +220,7 @@ def test_results_name_paths_relative_to_the_study_folder_and_a_moved_study_still
 
 
 def test_pick_language_conditions_and_n_objects_in_a_study():
-    from lerobot_factorworld.factors.sampling import PICK_OBJECTS
+    from lerobot_factorworld.pick.family import PICK_FAMILY
     from lerobot_factorworld.study.steps import collect_config
 
     factors = ["light", "table_texture", "held_out_phrasings", "held_out_objects"]
@@ -232,7 +232,7 @@ def test_pick_language_conditions_and_n_objects_in_a_study():
     assert collect.inputs["n_objects"] == 3
     assert collect_config(collect.inputs, Path("/tmp/x"), collect.key).sampling.n_objects == 3
     default = _cfg(tasks=["pick"], n_train_envs=[2], factors=factors)
-    assert make_plan(default).of_kind("collect")[0].inputs["n_objects"] == PICK_OBJECTS[1]
+    assert make_plan(default).of_kind("collect")[0].inputs["n_objects"] == PICK_FAMILY.n_objects[1]
     assert collect.key not in _keys(default, "collect")
     assert "n_objects" not in make_plan(_cfg()).of_kind("collect")[0].inputs  # door-open: not in its key
     with pytest.raises(ValueError, match="applies to the pick family only .* not to door-open"):
@@ -244,7 +244,7 @@ def test_pick_language_conditions_and_n_objects_in_a_study():
 
 
 def test_pick_study_config_plans_the_real_robot_conditions():
-    from lerobot_factorworld.cli_errors import parse_config
+    from lerobot_factorworld.core.settings import parse_config
 
     cfg = parse_config(StudyConfig, [f"--config_path={ROOT / 'configs' / 'study' / 'pick.yaml'}"], "study")
     conditions = [s.meta["condition"] for s in make_plan(cfg).of_kind("eval")]
@@ -257,7 +257,7 @@ def test_pick_study_config_plans_the_real_robot_conditions():
 
 
 def test_frozen_resnet_encoders_cost_more_than_the_conv_encoder(tmp_path, monkeypatch):
-    from lerobot_factorworld.study.plan import estimate
+    from lerobot_factorworld.study.cost import estimate
 
     monkeypatch.chdir(tmp_path)
     (tmp_path / "w.pt").write_bytes(b"w")

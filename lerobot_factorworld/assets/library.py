@@ -29,16 +29,15 @@ from typing import Any, Literal, get_args
 import numpy as np
 from PIL import Image
 
-from ._rng import stable_seed
+from ..core.rng import stable_seed
+from ..core.splits import SPLITS, Split, check_split
 from .mesh import Mesh, normalize_mesh
 from .mesh_io import MESH_EXTENSIONS, read_mesh_file
 from .shapes import SHAPE_FAMILIES, generate_shape
 from .textures import TEXTURE_FAMILIES, generate_texture
 
 AssetKind = Literal["texture", "shape"]
-Split = Literal["train", "eval"]
 KINDS: tuple[str, ...] = get_args(AssetKind)
-SPLITS: tuple[str, ...] = get_args(Split)
 AssetSplitMode = Literal["family", "variant"]
 ASSET_SPLITS: tuple[str, ...] = get_args(AssetSplitMode)
 DEFAULT_ASSET_SPLIT: AssetSplitMode = "family"
@@ -138,16 +137,10 @@ _NAME_HELP = "expected 'proc:<family>-<NNN>', 'metaworld:<path inside metaworld/
 # names
 
 
-def _check_kind(kind: str) -> AssetKind:
+def check_kind(kind: str) -> AssetKind:
     if kind not in KINDS:
         raise ValueError(f"unknown asset kind {kind!r}; valid kinds: {', '.join(KINDS)}")
     return kind  # type: ignore[return-value]
-
-
-def _check_split(split: str) -> Split:
-    if split not in SPLITS:
-        raise ValueError(f"unknown split {split!r}; valid splits: {', '.join(SPLITS)}")
-    return split  # type: ignore[return-value]
 
 
 def check_asset_split(mode: str) -> AssetSplitMode:
@@ -202,7 +195,7 @@ def _proc_family(name: str) -> str:
 
 def builtin_families(kind: AssetKind) -> tuple[str, ...]:
     """Every built-in family of ``kind``: the procedural ones, then the Meta-World-only ones (sorted)."""
-    kind = _check_kind(kind)
+    kind = check_kind(kind)
     proc = TEXTURE_FAMILIES if kind == "texture" else SHAPE_FAMILIES
     shipped = METAWORLD_TEXTURE_FAMILIES if kind == "texture" else METAWORLD_MESH_FAMILIES
     return proc + tuple(sorted(set(shipped.values()) - set(proc)))
@@ -318,7 +311,7 @@ def clear_cache() -> None:
 
 def builtin_names(kind: AssetKind) -> tuple[str, ...]:
     """Sorted built-in pool: ``VARIANTS_PER_FAMILY`` variants per procedural family plus Meta-World files."""
-    kind = _check_kind(kind)
+    kind = check_kind(kind)
     families = TEXTURE_FAMILIES if kind == "texture" else SHAPE_FAMILIES
     shipped = METAWORLD_TEXTURES if kind == "texture" else METAWORLD_MESHES
     names = [f"proc:{f}-{i:03d}" for f in families for i in range(VARIANTS_PER_FAMILY)]
@@ -327,25 +320,10 @@ def builtin_names(kind: AssetKind) -> tuple[str, ...]:
 
 
 def seen_families(kind: AssetKind) -> tuple[str, ...]:
-    """Built-in families the default scenes show, which the family split always puts in ``train``.
-
-    A factor a study does not vary keeps its default, so these are seen in training whatever the split.
-    Textures: the families of every texture any task's default scene shows, read from the scenes
-    (:func:`~lerobot_factorworld.assets.scenes.scene_assets`: the table's wood, the floor's tiles, the
-    robot's and fixtures' metal, the walls' bricks). Shapes: the families of the tasks' loose objects
-    (:attr:`~lerobot_factorworld.tasks.TaskSpec.object_family`: the puck is a cylinder, ...), which the
-    object-shape factor replaces; a fixture's meshes need no place here, because no distractor of its task
-    is drawn from their families (:func:`~lerobot_factorworld.assets.scenes.scene_shape_families`).
-    Holding any of them out would put a training look in the evaluation split.
-    """
-    from ..tasks import TASKS
-    from .scenes import scene_texture_families
-
-    if _check_kind(kind) == "texture":
-        seen = {family for task in TASKS for family in scene_texture_families(task)}
-    else:
-        seen = {task.object_family for task in TASKS.values() if task.object_family}
-    return tuple(sorted(seen))
+    """Built-in families the default scenes show, which the family split always puts in ``train``, as
+    ``asset_splits.json`` records them (computed from the tasks' scenes by
+    :func:`lerobot_factorworld.assets.split_document.scene_seen_families` when the file is written)."""
+    return tuple(_document()["seen_families"][check_kind(kind)])
 
 
 def _rank(seed: int, key: str) -> tuple[bytes, str]:
@@ -365,7 +343,7 @@ def split_pool(
     The seeded permutation ranks items by sha256 of ``(seed, key)`` (``keys`` default to the names), so it
     is identical on every machine and NumPy version, and adding one item never reshuffles the others.
     """
-    kind = _check_kind(kind)
+    kind = check_kind(kind)
     keys = list(names) if keys is None else list(keys)
     if len(keys) != len(names) or len(set(keys)) != len(keys):
         raise ValueError("split keys must be unique and match the names one to one")
@@ -394,7 +372,7 @@ def split_pool_by_family(
     reshuffles the rest) until ``train`` holds :data:`TRAIN_FRACTION` of the names; the rest, at least one
     family, is held out.
     """
-    kind = _check_kind(kind)
+    kind = check_kind(kind)
     if len(families) != len(names):
         raise ValueError("families must match the names one to one")
     sizes: dict[str, int] = {}
@@ -429,13 +407,16 @@ def _split_by_family(
     }, by_split
 
 
-def _builtin_split(mode: AssetSplitMode, kind: AssetKind, seed: int) -> dict[str, dict[str, tuple[str, ...]]]:
-    """``{"names": {split: names}, "families": {split: families}}`` of the built-in pool, computed."""
+def builtin_split(
+    mode: AssetSplitMode, kind: AssetKind, seed: int, seen: Sequence[str]
+) -> dict[str, dict[str, tuple[str, ...]]]:
+    """``{"names": {split: names}, "families": {split: families}}`` of the built-in pool, computed, with the
+    families in ``seen`` kept in ``train`` by the family split."""
     names = builtin_names(kind)
     families = [asset_family(n) for n in names]
     if mode == "variant":
         return _variant_lists(names, families, split_pool(names, kind, seed))
-    by_name, by_family = _split_by_family(names, families, kind, seed, seen_families(kind))
+    by_name, by_family = _split_by_family(names, families, kind, seed, seen)
     return {"names": by_name, "families": by_family}
 
 
@@ -451,43 +432,40 @@ def _variant_lists(
 def splits_digest(lists: dict[str, Any]) -> str:
     """sha256 of the split lists (``{mode: {kind: {"names": {split: [..]}, "families": {split: [..]}}}}``),
     as stored in ``asset_splits.json``."""
-    return hashlib.sha256(json.dumps(_jsonable(lists), sort_keys=True, separators=(",", ":")).encode()).hexdigest()
+    return hashlib.sha256(json.dumps(jsonable(lists), sort_keys=True, separators=(",", ":")).encode()).hexdigest()
 
 
-def _jsonable(value: Any) -> Any:
+def jsonable(value: Any) -> Any:
     if isinstance(value, dict):
-        return {k: _jsonable(v) for k, v in value.items()}
+        return {k: jsonable(v) for k, v in value.items()}
     if isinstance(value, (tuple, list)):
-        return [_jsonable(v) for v in value]
+        return [jsonable(v) for v in value]
     return value
-
-
-def builtin_splits_document(seed: int = SPLITS_SEED) -> dict[str, Any]:
-    """The content of ``asset_splits.json``: both split modes, recomputed from the code's built-in pools."""
-    lists = {mode: {kind: _builtin_split(mode, kind, seed) for kind in KINDS} for mode in ASSET_SPLITS}  # type: ignore[arg-type]
-    return {
-        "generator": "scripts/make_asset_splits.py",
-        "seed": seed,
-        "train_fraction": dict(TRAIN_FRACTION),
-        "seen_families": {kind: list(seen_families(kind)) for kind in KINDS},  # type: ignore[arg-type]
-        "counts": {
-            mode: {kind: {s: len(d["names"][s]) for s in SPLITS} for kind, d in by_kind.items()}
-            for mode, by_kind in lists.items()
-        },
-        "splits": _jsonable(lists),
-        "sha256": splits_digest(lists),
-    }
 
 
 class AssetSplitsError(RuntimeError):
     """``asset_splits.json`` is missing, malformed, or was edited by hand."""
 
 
+REGENERATE = "regenerate it with `python scripts/make_asset_splits.py`"
+
+
 @functools.lru_cache(maxsize=1)
-def _builtin_splits() -> dict[str, dict[str, dict[str, dict[str, tuple[str, ...]]]]]:
-    regen = "regenerate it with `python scripts/make_asset_splits.py`"
+def _document() -> dict[str, Any]:
     try:
         doc = json.loads(SPLITS_FILE.read_text(encoding="utf-8"))
+    except (OSError, ValueError) as exc:
+        raise AssetSplitsError(f"cannot read built-in splits from {SPLITS_FILE} ({exc}); {REGENERATE}") from exc
+    if not isinstance(doc, dict) or not isinstance(doc.get("seen_families"), dict):
+        raise AssetSplitsError(f"{SPLITS_FILE} is malformed (no seen_families); {REGENERATE}")
+    return doc
+
+
+@functools.lru_cache(maxsize=1)
+def _builtin_splits() -> dict[str, dict[str, dict[str, dict[str, tuple[str, ...]]]]]:
+    regen = REGENERATE
+    try:
+        doc = _document()
         raw = doc["splits"]
         lists = {
             mode: {
@@ -549,12 +527,12 @@ def _folder_files(kind: AssetKind, folder: str | Path) -> list[tuple[str, str]]:
 def folder_names(kind: AssetKind, folder: str | Path) -> tuple[str, ...]:
     """``file:`` names of all supported files under ``folder`` (recursive, hidden entries skipped), sorted by
     their path relative to the folder."""
-    return tuple(name for _, name in _folder_files(_check_kind(kind), folder))
+    return tuple(name for _, name in _folder_files(check_kind(kind), folder))
 
 
 def asset_families(kind: AssetKind, folder: str | Path | None = None) -> dict[str, str]:
     """Name -> family of every asset in the built-in pool, or in ``folder`` (see :func:`asset_family`)."""
-    kind = _check_kind(kind)
+    kind = check_kind(kind)
     if folder is None:
         return dict(_builtin_families_of(kind))
     return {name: _folder_family(rel) for rel, name in _folder_files(kind, folder)}
@@ -571,7 +549,7 @@ def _split_lists(
     if folder is None:
         if seed == SPLITS_SEED:
             return _builtin_splits()[mode][kind]
-        return _builtin_split(mode, kind, seed)
+        return builtin_split(mode, kind, seed, seen_families(kind))
     files = _folder_files(kind, folder)
     names, rels = [n for _, n in files], [r for r, _ in files]
     families = [_folder_family(r) for r in rels]
@@ -597,5 +575,12 @@ def split_names(
     folder splits identically anywhere. The families a side draws from are those of its names
     (:func:`asset_family` with the same ``folder``); ``asset_splits.json`` lists them for the built-in pool.
     """
-    kind, split, mode = _check_kind(kind), _check_split(split), check_asset_split(mode)
+    kind, split, mode = check_kind(kind), check_split(split), check_asset_split(mode)
     return _split_lists(kind, folder, seed, mode)["names"][split]
+
+
+def check_asset_folders(texture_folder: str | None, shape_folder: str | None) -> None:
+    """User asset folders exist and hold at least one usable file (listing only; nothing is loaded)."""
+    for kind, folder in (("texture", texture_folder), ("shape", shape_folder)):
+        if folder is not None:
+            folder_names(kind, folder)  # raises naming the supported extensions

@@ -21,7 +21,20 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 
+import mujoco
+from metaworld.env_dict import ALL_V3_ENVIRONMENTS
+
+from ..families import family_of
+from ..tasks import TaskSpec, get_task
 from .library import METAWORLD_MESH_FAMILIES, METAWORLD_TEXTURE_FAMILIES, asset_family, metaworld_assets_dir
+
+VISIBLE_GROUPS = (0, 1, 2)  # geom groups MuJoCo renders by default
+
+
+def metaworld_xml(task: TaskSpec) -> str:
+    """The Meta-World XML file of ``task``'s scene (of its ``metaworld_base`` for a task family)."""
+    cls = ALL_V3_ENVIRONMENTS[task.metaworld_name]
+    return cls.model_name.fget(None)  # the property only joins a constant path
 
 
 @dataclass(frozen=True)
@@ -46,11 +59,6 @@ class SceneAssets:
 @functools.cache
 def scene_assets(task_name: str) -> SceneAssets:
     """Parse the task's Meta-World XML (no compilation: ~10 ms per task once Meta-World is imported)."""
-    import mujoco
-
-    from ..scene.build import VISIBLE_GROUPS, metaworld_xml
-    from ..tasks import get_task
-
     task = get_task(task_name)
     xml = Path(metaworld_xml(task))
     spec = mujoco.MjSpec.from_file(str(xml))
@@ -107,11 +115,10 @@ def scene_texture_families(task_name: str) -> tuple[str, ...]:
 def scene_shape_families(task_name: str, object_family: str | None = None) -> tuple[str, ...]:
     """Shape families the task's scene shows (sorted): of its built-in meshes (the fixtures' parts), of its
     loose object (``object_family`` when the object was reshaped, else ``TaskSpec.object_family``) and of a
-    task family's objects (``TaskSpec.lookalike_families``). No distractor is drawn from them."""
-    from ..tasks import get_task
-
+    task family's objects (``TaskFamily.lookalike_families``). No distractor is drawn from them."""
     task, shown = get_task(task_name), scene_assets(task_name)
     meshes = set(shown.meshes) - (set(shown.object_meshes) if object_family is not None else set())
     own = object_family if object_family is not None else task.object_family
-    families = {asset_family(n) for n in meshes} | set(task.lookalike_families) | ({own} if own else set())
+    lookalike = family_of(task).lookalike_families(task)
+    families = {asset_family(n) for n in meshes} | set(lookalike) | ({own} if own else set())
     return tuple(sorted(families))

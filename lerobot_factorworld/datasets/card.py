@@ -48,7 +48,7 @@ def card_description(meta) -> str:
 
 def write_card(meta) -> Path:
     """Write ``README.md`` (the card) into the dataset folder; push_to_hub sends the same card."""
-    from lerobot.datasets.utils import create_lerobot_dataset_card
+    from lerobot.datasets.utils import create_lerobot_dataset_card  # noqa: PLC0415  heavy; only once a dataset is written
 
     root = Path(meta.root)
     sidecar = json.loads((root / "meta" / "factorworld.json").read_text())

@@ -9,9 +9,11 @@ merged with LeRobot's ``aggregate_datasets`` (which keeps the factor columns) in
 
 from __future__ import annotations
 
+import importlib
 import json
 import os
 import shutil
+import sys
 import time
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import asdict, dataclass, field
@@ -20,32 +22,40 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from lerobot.utils.constants import ACTION, OBS_IMAGES, OBS_STATE
+from tqdm import tqdm
 
-from ..factors.registry import PAPER_STUDY_FACTORS
-from ..factors.sampling import SamplingOptions
-from ..validation import (
-    check_asset_folders,
+from ..assets.library import check_asset_folders
+from ..core.checks import (
     check_at_least,
-    check_cameras,
     check_choice,
-    check_factors,
     check_folder_target,
     check_image_size,
-    check_quality,
     check_repo_id,
     check_seed,
-    check_split,
     check_std,
-    check_tasks,
     split_list,
 )
-from .hub import check_push_settings
+from ..core.io import atomic_write_text
+from ..core.splits import check_split
+from ..envs import runtime
+from ..envs.factor_env import CONTROL_FPS, FactorWorldEnv
+from ..experts import Episode, expert_policy, rollout
+from ..factors.registry import PAPER_STUDY_FACTORS, check_factors
+from ..factors.values import SceneConfig
+from ..protocol.sampling import SamplingOptions, sample_configs
+from ..protocol.sidecar import SIDECAR
+from ..scene.build import check_quality
+from ..scene.cameras import check_cameras
+from ..tasks import check_tasks
+from .card import write_card
+from .hub import check_push_settings, push_dataset
+from .schema import ENV_ID_COLUMN, SPLIT_COLUMN, encode_episode, encode_factors, frame_features
 from .version import DATA_VERSION, DATA_VERSION_KEY, data_version, describe_data_version
 
 MODES = ("new", "overwrite", "append")
 PLAN_FILE = "plan.json"
 JOB_RESULT_FILE = "factorworld_job.json"
-SIDECAR = "meta/factorworld.json"
 # Settings that do not change what gets collected (so they may differ on resume).
 RUN_ONLY_SETTINGS = ("workers", "mode", "push_to_hub", "private", "episodes_per_shard", "start_method")
 
@@ -177,8 +187,6 @@ class CollectReport:
 
 def plan_jobs(cfg: CollectConfig) -> list[Job]:
     """Every job of the collection, in a deterministic order."""
-    from ..factors.sampling import sample_configs
-
     jobs = []
     for task_index, task in enumerate(cfg.task_names):
         configs = sample_configs(task, cfg.n_envs, cfg.seed, cfg.split, cfg.factors, cfg.sampling)
@@ -206,27 +214,12 @@ def episode_seed(cfg_seed: int, task_index: int, env_index: int, demo: int, atte
     return int(np.random.SeedSequence([cfg_seed, task_index, env_index, demo, attempt]).generate_state(1)[0])
 
 
-NOISE_STREAM = 0  # spawn key of the action-noise stream under an episode seed
-
-
-def noise_rng(seed: int) -> np.random.Generator:
-    """The expert's action-noise stream for the episode reset with ``seed``.
-
-    ``env.reset(seed=seed)`` seeds the env's own generator (object start) with ``SeedSequence(seed)``;
-    the noise comes from a spawned child of that sequence, a statistically independent stream, so the
-    noise never repeats the numbers that placed the object.
-    """
-    return np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(NOISE_STREAM,)))
-
-
 def staging_dir(root: Path) -> Path:
     return root.parent / f"{root.name}.parts"
 
 
 def collect(cfg: CollectConfig) -> CollectReport:
     """Run (or resume) a collection and merge it into ``cfg.root``."""
-    from tqdm import tqdm
-
     start = time.perf_counter()
     _quiet_encoder()
     root = Path(cfg.root).resolve()
@@ -274,8 +267,6 @@ def collect(cfg: CollectConfig) -> CollectReport:
     failures = {f"{r['task']}/{r['env_id']}": r["failures"] for r in results if r["failures"]}
     episodes, frames = _merge(cfg, root, parts, jobs, results)
     if cfg.push_to_hub:
-        from .hub import push_dataset
-
         push_dataset(root, cfg.repo_id, private=cfg.private)
     return CollectReport(root, episodes, frames, failures, time.perf_counter() - start)
 
@@ -287,13 +278,8 @@ def _worker_context(start_method: str):
     """How worker processes start. ``auto``: ``fork`` on Linux when this process holds no GL context
     (workers then inherit LeRobot and MuJoCo already imported: no per-worker import, seconds each),
     else ``forkserver`` preloaded with those modules (safe with GL contexts and torch threads)."""
-    import importlib
-    import sys
-
-    from ..envs import factor_env
-
     if start_method == "auto":
-        start_method = "fork" if sys.platform == "linux" and not factor_env.gl_context_created() else "forkserver"
+        start_method = "fork" if sys.platform == "linux" and not runtime.gl_context_created() else "forkserver"
     context = get_context(start_method)
     if start_method == "forkserver":
         context.set_forkserver_preload([WORKER_PRELOAD])
@@ -352,7 +338,7 @@ def _prepare(cfg: CollectConfig, root: Path, parts: Path) -> None:
                 "or pass --mode=overwrite to discard it"
             )
     parts.mkdir(parents=True, exist_ok=True)
-    _atomic_write(plan_path, json.dumps({"settings": fingerprint, "mode": cfg.mode}, indent=1, sort_keys=True))
+    atomic_write_text(plan_path, json.dumps({"settings": fingerprint, "mode": cfg.mode}, indent=1, sort_keys=True))
 
 
 def _check_data_version(recorded: dict | None, what: str, fix: str) -> None:
@@ -390,12 +376,7 @@ def _settings_diff(old: dict, new: dict) -> str:
 
 def run_job(job: Job, settings: dict, parts_dir: str) -> dict:
     """Collect one job's demos into ``<parts>/<job_id>`` (atomically). Runs in a worker process."""
-    from lerobot.datasets.lerobot_dataset import LeRobotDataset
-
-    from ..envs.factor_env import CONTROL_FPS, FactorWorldEnv
-    from ..experts import expert_action, expert_policy
-    from ..factors.values import SceneConfig
-    from .schema import ENV_ID_COLUMN, SPLIT_COLUMN, encode_episode, encode_factors, frame_features
+    from lerobot.datasets.lerobot_dataset import LeRobotDataset  # noqa: PLC0415  heavy (seconds): only a collecting worker needs it
 
     worker = {"push_to_hub": False, "private": False}  # the main process pushes (and checked the token)
     cfg = CollectConfig(**{**settings, **worker, "sampling": SamplingOptions(**settings["sampling"])})
@@ -439,23 +420,24 @@ def run_job(job: Job, settings: dict, parts_dir: str) -> dict:
         for demo in job.demo_indices:
             for attempt in range(cfg.max_attempts):
                 seed = episode_seed(cfg.seed, job.task_index, job.env_index, demo, attempt)
-                frames, info = _rollout(env, policy, seed, cfg.action_noise, expert_action)
-                if info["is_success"]:
+                episode = rollout(env, policy, seed, cfg.action_noise)
+                if episode.success:
                     break
                 failures += 1
             else:
                 continue
-            for frame in frames:
+            for frame in _frames(episode, env.task_description):
                 dataset.add_frame(frame)
             episode_columns.clear()
             episode_columns.update(
-                {ENV_ID_COLUMN: config.env_id, SPLIT_COLUMN: config.split, **encode_factors(info["factors"])}
+                {ENV_ID_COLUMN: config.env_id, SPLIT_COLUMN: config.split, **encode_factors(episode.info["factors"])}
             )
-            episode_columns.update(encode_episode(info, env.task_description))  # the episode's instruction
+            # the episode's instruction (and a family's record of what it asked for)
+            episode_columns.update(encode_episode(episode.info, env.task_description, env.task))
             episode_columns["factorworld/seed"] = seed
             episode_columns["factorworld/demo"] = demo
             dataset.save_episode()
-            episodes.append({"demo": demo, "seed": seed, "length": len(frames)})
+            episodes.append({"demo": demo, "seed": seed, "length": len(episode)})
     finally:
         dataset.finalize()
         env.close()
@@ -467,33 +449,27 @@ def run_job(job: Job, settings: dict, parts_dir: str) -> dict:
         "failures": failures,
         "config": job.config,
     }
-    _atomic_write(tmp / JOB_RESULT_FILE, json.dumps(result, indent=1))
+    atomic_write_text(tmp / JOB_RESULT_FILE, json.dumps(result, indent=1))
     if final.exists():
         shutil.rmtree(final)
     tmp.rename(final)  # the job counts as done only once its shard is complete
     return result
 
 
-def _rollout(env, policy, seed: int, noise: float, expert_action) -> tuple[list[dict], dict]:
-    from lerobot.utils.constants import ACTION, OBS_IMAGES, OBS_STATE
-
-    obs, info = env.reset(seed=seed)
-    rng = noise_rng(seed)
+def _frames(episode: Episode, task_description: str) -> list[dict]:
+    """LeRobot frames of an expert episode: each observation with the action taken from it."""
     frames = []
-    for _ in range(env._max_episode_steps):
-        action = expert_action(policy, env.state_observation, rng, noise)
+    for obs, action in zip(episode.observations, episode.actions, strict=True):
         frame = {f"{OBS_IMAGES}.{cam}": image for cam, image in obs["pixels"].items()}
-        frame.update({OBS_STATE: obs["agent_pos"], ACTION: action, "task": env.task_description})
+        frame.update({OBS_STATE: obs["agent_pos"], ACTION: action, "task": task_description})
         frames.append(frame)
-        obs, _, terminated, truncated, info = env.step(action)
-        if terminated or truncated:
-            break
-    return frames, info
+    return frames
 
 
 def _merge(cfg: CollectConfig, root: Path, parts: Path, jobs: list[Job], results: list[dict]) -> tuple[int, int]:
-    from lerobot.datasets.aggregate import aggregate_datasets
-    from lerobot.datasets.lerobot_dataset import LeRobotDatasetMetadata
+    # heavy (seconds): settings are checked before LeRobot's dataset stack is imported
+    from lerobot.datasets.aggregate import aggregate_datasets  # noqa: PLC0415
+    from lerobot.datasets.lerobot_dataset import LeRobotDatasetMetadata  # noqa: PLC0415
 
     sources = [parts / job.job_id for job, r in zip(jobs, results, strict=True) if r["episodes"]]
     repo_ids = [f"local/{path.name}" for path in sources]
@@ -521,7 +497,7 @@ def _merge(cfg: CollectConfig, root: Path, parts: Path, jobs: list[Job], results
         "environments": [json.loads(c) for c in unique],
         "failures": failures,
     }
-    _atomic_write(merged / SIDECAR, json.dumps(sidecar, indent=1, sort_keys=True))
+    atomic_write_text(merged / SIDECAR, json.dumps(sidecar, indent=1, sort_keys=True))
     # Swap in the merged dataset only now: until here the previous dataset (if any) is untouched.
     backup = root.parent / f"{root.name}.previous"
     if root.exists():
@@ -531,8 +507,6 @@ def _merge(cfg: CollectConfig, root: Path, parts: Path, jobs: list[Job], results
         shutil.rmtree(backup)
     shutil.rmtree(parts)
     meta = LeRobotDatasetMetadata(cfg.repo_id, root=root)
-    from .card import write_card
-
     write_card(meta)
     return meta.total_episodes, meta.total_frames
 
@@ -540,10 +514,3 @@ def _merge(cfg: CollectConfig, root: Path, parts: Path, jobs: list[Job], results
 def _read_sidecar(root: Path) -> dict | None:
     path = root / SIDECAR
     return json.loads(path.read_text()) if path.is_file() else None
-
-
-def _atomic_write(path: Path, text: str) -> None:
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_suffix(path.suffix + ".tmp")
-    tmp.write_text(text)
-    tmp.replace(path)

@@ -5,6 +5,10 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+import huggingface_hub
+
+from .card import card_description, card_tags
+
 LOCAL_NAMESPACE = "local"  # LeRobot's namespace for datasets that stay on disk (``local/<name>``)
 
 
@@ -28,10 +32,8 @@ def check_push_settings(repo_id: str, push_to_hub: bool, private: bool) -> None:
             f"push_to_hub=true needs a Hub repo_id ('user/name' with your user or organization), "
             f"not {repo_id!r} ({LOCAL_NAMESPACE}/... names a dataset that stays on disk)"
         )
-    from huggingface_hub import get_token
-
     try:
-        token = get_token()
+        token = huggingface_hub.get_token()
     except Exception as err:  # e.g. a failed OIDC exchange (HF_OIDC_RESOURCE): no usable token
         raise ValueError(f"push_to_hub=true, but no Hugging Face token could be read ({err})") from None
     if not token:
@@ -42,9 +44,7 @@ def check_push_settings(repo_id: str, push_to_hub: bool, private: bool) -> None:
 
 
 def push_dataset(root: str | Path, repo_id: str, private: bool = False) -> None:
-    from lerobot.datasets.lerobot_dataset import LeRobotDataset
-
-    from .card import card_description, card_tags
+    from lerobot.datasets.lerobot_dataset import LeRobotDataset  # noqa: PLC0415  heavy (torch); only when pushing
 
     root = Path(root)
     settings = json.loads((root / "meta" / "factorworld.json").read_text())["settings"]

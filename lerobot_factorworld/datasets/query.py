@@ -6,6 +6,7 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
+from ..factors.registry import check_factor_names
 from .schema import ENV_ID_COLUMN, SPLIT_COLUMN, decode_episode, decode_factors
 
 EPISODE_FIELDS = ("instruction", "target")
@@ -16,7 +17,8 @@ def episode_records(repo_id: str, root: str | Path) -> list[dict[str, Any]]:
     """One record per episode: index, env_id, split, task, length, typed ``factors``, and the episode's
     ``instruction``, ``target`` and ``objects`` (a pick episode's named object and scene; see
     :func:`~lerobot_factorworld.datasets.schema.decode_episode`)."""
-    from lerobot.datasets.lerobot_dataset import LeRobotDatasetMetadata
+    # LeRobot is imported on use: importing it costs seconds (torch), and the package stays light without it.
+    from lerobot.datasets.lerobot_dataset import LeRobotDatasetMetadata  # noqa: PLC0415
 
     root = Path(root)
     if not (root / "meta" / "info.json").is_file():
@@ -44,8 +46,6 @@ def select_episodes(
     """Episode indices whose factors match: ``select_episodes(id, root, table_texture="proc:wood-003")``
     or any predicate on the typed factor dict (``where=lambda f: f["light"][0] > 0.5``); ``target=`` and
     ``instruction=`` select pick episodes by their named object or instruction."""
-    from ..factors.registry import check_factor_names
-
     check_factor_names([k for k in equals if k not in EPISODE_FIELDS])
     out = []
     for record in episode_records(repo_id, root):

@@ -13,12 +13,14 @@ from __future__ import annotations
 
 import json
 import math
+from dataclasses import asdict
 from typing import Any
 
 from lerobot.utils.constants import ACTION, OBS_IMAGES, OBS_STATE
 
 from ..factors.registry import FACTORS
 from ..factors.values import SceneObject
+from ..families import family_of
 
 FACTOR_PREFIX = "factors/"
 META_PREFIX = "factorworld/"
@@ -63,13 +65,15 @@ def encode_factors(factors: dict[str, Any]) -> dict[str, Any]:
     return out
 
 
-def encode_episode(info: dict[str, Any], instruction: str) -> dict[str, Any]:
-    """An episode's instruction and, for a pick episode, its named object and objects -> columns."""
-    pick = info.get("pick") or {}
+def encode_episode(info: dict[str, Any], instruction: str, task: str) -> dict[str, Any]:
+    """An episode's instruction and, for a task family with content (the pick family), its named object
+    and objects (the episode record ``info`` holds under the family's content key) -> columns."""
+    key = family_of(task).content_key
+    record = (info.get(key) if key else None) or {}
     return {
         INSTRUCTION_COLUMN: instruction,
-        TARGET_COLUMN: pick.get("target", ""),
-        OBJECTS_COLUMN: json.dumps(pick.get("objects", []), sort_keys=True),
+        TARGET_COLUMN: record.get("target", ""),
+        OBJECTS_COLUMN: json.dumps(record.get("objects", []), sort_keys=True),
     }
 
 
@@ -101,7 +105,5 @@ def decode_factors(row: dict[str, Any]) -> dict[str, Any]:
 
 def _object_dict(value: Any) -> dict:
     if isinstance(value, SceneObject):
-        from dataclasses import asdict
-
         return asdict(value)
     return dict(value)

@@ -29,8 +29,8 @@ Episode end:
 
 Info:
     ``is_success``, ``factors`` (the values the scene really had, defaults filled in), ``env_id``,
-    ``env_index``, ``metaworld_reward``; in the ``pick`` family also ``pick`` (the episode's instruction,
-    named object and objects with their poses, :func:`lerobot_factorworld.pick.layout.episode_record`).
+    ``env_index``, ``metaworld_reward``; for a task family with content also the episode's record under the
+    family's ``content_key`` (the pick family's: instruction, named object, objects with their poses).
 """
 
 from __future__ import annotations
@@ -44,25 +44,19 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
-from ..factors.registry import FACTORS, factor_range
-from ..factors.values import FactorValues, SceneConfig, to_jsonable
+from ..core.checks import check_image_size
+from ..factors.registry import FACTORS, factor_range, support_reason
+from ..factors.values import SceneConfig, to_jsonable
+from ..families import family_of
 from ..scene.build import DEFAULT_HEADLIGHT, QUALITIES, Quality
 from ..scene.cameras import DEFAULT_CAMERAS, check_camera_names
 from ..tasks import get_task
-from ..validation import check_image_size
+from .runtime import CompiledScene
 
 PER_EPISODE_FACTORS = ("object_pos", "arm_pos")  # applied at reset; everything else is compiled in
 RESERVED_OPTION_PREFIX = "lerobot_"  # LeRobot's rollout passes {"lerobot_new_rollout": True}
 OPTIONS = ("config", "env_index", "factors")
 CONTROL_FPS = 80  # Meta-World: timestep 0.0025 s x frame_skip 5 = 12.5 ms per env step
-
-
-_GL_CONTEXTS_CREATED = False
-
-
-def gl_context_created() -> bool:
-    """Whether this process has created a MuJoCo render context (forking it would share GL state)."""
-    return _GL_CONTEXTS_CREATED
 
 
 class FactorWorldEnv(gym.Env):
@@ -83,6 +77,7 @@ class FactorWorldEnv(gym.Env):
         scene_cache_size: int = 4,
     ) -> None:
         self.task_spec = get_task(task)
+        self._family = family_of(self.task_spec)
         self.configs = _as_configs(self.task_spec.name, configs)
         self.cameras = check_camera_names([cameras] if isinstance(cameras, str) else list(cameras), allow_none=True)
         if not self.cameras:
@@ -110,9 +105,9 @@ class FactorWorldEnv(gym.Env):
         self.observation_space = gym.spaces.Dict(spaces)
         self.action_space = gym.spaces.Box(-1.0, 1.0, (4,), dtype=np.float32)
 
-        self._scenes: OrderedDict[tuple, _Scene] = OrderedDict()
+        self._scenes: OrderedDict[tuple, CompiledScene] = OrderedDict()
         self._scene_cache_size = max(1, scene_cache_size)
-        self._scene: _Scene | None = None
+        self._scene: CompiledScene | None = None
         self._config: SceneConfig | None = None
         self._steps = 0
         self._last_frame: np.ndarray | None = None
@@ -196,6 +191,12 @@ class FactorWorldEnv(gym.Env):
         return self._config
 
     @property
+    def max_episode_steps(self) -> int:
+        """The horizon: steps after which an episode truncates (read-only; LeRobot's evaluation reads the
+        same number through ``env.call("_max_episode_steps")``)."""
+        return self._max_episode_steps
+
+    @property
     def episode_factors(self) -> dict[str, Any]:
         return dict(self._episode_factors)
 
@@ -225,18 +226,15 @@ class FactorWorldEnv(gym.Env):
             config = config.with_factors(**options["factors"])
         return config, index
 
-    def _scene_for(self, config: SceneConfig) -> _Scene:
+    def _scene_for(self, config: SceneConfig) -> CompiledScene:
         factors = replace(config.factors, **{name: None for name in PER_EPISODE_FACTORS})
-        layout = config.pick
-        key = (factors, None if layout is None else layout.objects)  # what the compiled model depends on
+        content = config.content
+        key = (factors, None if content is None else self._family.scene_key(content))  # what the model depends on
         scene = self._scenes.pop(key, None)
         if scene is None:
-            if layout is None:
-                scene = _Scene(self.task_spec, factors, self.cameras, self.quality, self.image_size)
-            else:
-                from ..pick.episode import PickScene
-
-                scene = PickScene(self.task_spec, factors, self.cameras, self.quality, self.image_size, layout)
+            args = (self.task_spec, factors, self.cameras, self.quality, self.image_size)
+            scene = self._family.make_scene(*args, content) if content is not None else None
+            scene = scene or CompiledScene(*args)  # the family's scene, or the plain Meta-World one
             while len(self._scenes) >= self._scene_cache_size:
                 _, old = self._scenes.popitem(last=False)
                 old.close()
@@ -268,60 +266,10 @@ def env_index_for_seed(seed: int, n_envs: int) -> int:
 
     LeRobot's ``eval_policy`` resets episode ``i`` with ``start_seed + i`` whatever the batch size, so
     consecutive episodes cycle through the environments: a multiple of ``n_envs`` episodes visits each
-    equally (``study.conditions.coverage`` checks it), and conditions evaluated from the same start
+    equally (``protocol.coverage.coverage`` checks it), and conditions evaluated from the same start
     seed share their object starts episode by episode.
     """
     return seed % n_envs
-
-
-class _Scene:
-    """One compiled scene: a Meta-World task env on our model, plus a renderer for our cameras."""
-
-    def __init__(self, task, factors: FactorValues, cameras, quality, image_size) -> None:
-        from ..scene.build import build_model, resting_height_shift, robot_frame_offset
-        from .metaworld_bridge import make_metaworld_env
-
-        self.task = task
-        self.cameras = cameras
-        self.model = build_model(task, factors, cameras, quality, image_size)
-        self.env = make_metaworld_env(task, self.model)
-        self.rest_shift = resting_height_shift(task, factors)
-        self.robot_offset = robot_frame_offset(factors)
-        self.image_size = image_size
-        self._renderer = None
-        self.metaworld_obs: np.ndarray | None = None
-
-    def reset(self, object_offset: Sequence[float], arm_offset: Sequence[float], config: SceneConfig) -> None:
-        from .metaworld_bridge import reset_metaworld
-
-        self.metaworld_obs = reset_metaworld(self.env, self.task, object_offset, arm_offset, self.rest_shift)
-
-    def proprioception(self, mw_obs: np.ndarray) -> np.ndarray:
-        """``agent_pos`` from Meta-World's state: gripper xyz and opening, now and one step before,
-        with positions moved from the world (table) frame into the robot's frame."""
-        state = np.concatenate([mw_obs[0:4], mw_obs[18:22]])
-        state[[0, 1, 2, 4, 5, 6]] += np.tile(self.robot_offset, 2)
-        return state.astype(np.float32)
-
-    def render_all(self) -> dict[str, np.ndarray]:
-        import mujoco
-
-        if self._renderer is None:
-            global _GL_CONTEXTS_CREATED
-            h, w = self.image_size
-            self._renderer = mujoco.Renderer(self.model, height=h, width=w)
-            _GL_CONTEXTS_CREATED = True
-        frames = {}
-        for cam in self.cameras:
-            self._renderer.update_scene(self.env.data, camera=cam)
-            frames[cam] = self._renderer.render()
-        return frames
-
-    def close(self) -> None:
-        if self._renderer is not None:
-            self._renderer.close()
-            self._renderer = None
-        self.env.close()
 
 
 def _as_configs(task: str, configs: SceneConfig | Sequence[SceneConfig] | None) -> tuple[SceneConfig, ...]:
@@ -340,8 +288,6 @@ def _as_configs(task: str, configs: SceneConfig | Sequence[SceneConfig] | None) 
 
 def resolved_factors(config: SceneConfig, object_offset: Sequence[float]) -> dict[str, Any]:
     """The values the scene really has: the configuration with defaults filled in (JSON-able)."""
-    from ..factors.registry import support_reason
-
     f = config.factors
     out: dict[str, Any] = {}
     for field_ in fields(f):

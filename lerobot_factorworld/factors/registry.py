@@ -8,13 +8,12 @@ Everything else (sampling, validation, the support matrix, docs) derives from :d
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any, Literal
 
 from ..tasks import TASKS, TaskSpec, get_task
 
-SPLITS = ("train", "eval")
 WIDTHS = ("narrow", "medium", "wide")
 TEXTURE_SCHEMES = ("proc:", "metaworld:", "file:", "rgb:")
 SHAPE_SCHEMES = ("proc:", "metaworld:", "file:")
@@ -399,3 +398,14 @@ PAPER_STUDY_FACTORS = (
 )
 """The seven factors of the paper's simulated study (object size/shape and arm pose are excluded
 there; object position is re-randomised every episode)."""
+
+
+def check_factors(factors: Sequence[str], tasks: Sequence[str], setting: str = "factors") -> None:
+    """Known factor names, each once, that apply to every task (the error says why one does not)."""
+    factors = list(factors)
+    check_factor_names(factors)
+    duplicates = sorted({f for f in factors if factors.count(f) > 1})
+    if duplicates:
+        raise ValueError(f"{setting}: factor(s) {', '.join(duplicates)} given more than once")
+    for task in tasks:
+        check_task_support(get_task(task), factors)

@@ -12,8 +12,11 @@ from dataclasses import asdict, dataclass, field, fields, is_dataclass, replace
 from pathlib import Path
 from typing import Any
 
+from ..core.io import atomic_write_json
+from ..core.splits import check_split
+from ..families import family_of
 from ..tasks import get_task
-from .registry import SPLITS, SceneObject, check_factor_names, check_task_support, validate_value
+from .registry import SceneObject, check_factor_names, check_task_support, validate_value
 
 __all__ = [
     "FactorValues",
@@ -84,9 +87,9 @@ class SceneConfig:
         instruction: Language instruction; ``None`` uses the task's own.
         split: Asset split the values were drawn from (``train`` or ``eval``); metadata only.
         env_id: Identifier of this environment within a study, e.g. ``pick-place/train/003``.
-        pick: For the ``pick`` family: the objects, their poses, and which one each episode names
-            (:class:`lerobot_factorworld.pick.layout.PickLayout`; ``None`` there gives the default
-            scene); the instruction then comes from it, never from ``instruction``. ``None`` elsewhere.
+        content: What the task's family adds to the scene (:mod:`lerobot_factorworld.families`), saved under
+            the family's ``content_key`` (the ``pick`` family: the objects, their poses and which one each
+            episode names; ``None`` there gives the family's default). ``None`` for a plain Meta-World task.
     """
 
     task: str
@@ -94,76 +97,62 @@ class SceneConfig:
     instruction: str | None = None
     split: str = "train"
     env_id: str = ""
-    pick: Any = None
+    content: Any = None
 
     def __post_init__(self) -> None:
         task = get_task(self.task)
         object.__setattr__(self, "task", task.name)
-        if self.split not in SPLITS:
-            raise ValueError(f"unknown split {self.split!r}; valid splits: {', '.join(SPLITS)}")
+        check_split(self.split)
         if isinstance(self.factors, dict):
             object.__setattr__(self, "factors", FactorValues.from_dict(self.factors))
         check_task_support(task, self.factors.non_default())
-        self._check_pick(task.family == "pick")
-
-    def _check_pick(self, is_pick: bool) -> None:
-        if not is_pick:
-            if self.pick is not None:
-                raise ValueError(f"task {self.task!r} takes no pick layout (only the pick family does)")
-            return
-        from ..pick.layout import PickLayout, default_layout
-
-        if isinstance(self.pick, dict):
-            object.__setattr__(self, "pick", PickLayout.from_dict(self.pick))
-        elif self.pick is None:
-            object.__setattr__(self, "pick", default_layout())
-        if not isinstance(self.pick, PickLayout):
-            raise ValueError(f"pick must be a PickLayout or a dict, got {type(self.pick).__name__}")
-        if self.instruction is not None:
-            raise ValueError(
-                "a pick configuration's instruction comes from its layout (target and phrasing template); "
-                "leave instruction unset"
-            )
+        object.__setattr__(self, "content", family_of(task).check_config(self))
 
     @property
     def task_description(self) -> str:
-        if self.pick is not None and self.pick.instruction:
-            return self.pick.instruction
-        return self.instruction or get_task(self.task).instruction
+        return family_of(self.task).instruction(self) or self.instruction or get_task(self.task).instruction
 
     def for_episode(self, rng: Any) -> SceneConfig:
-        """The configuration of one episode: a pick layout's target and phrasing drawn from ``rng`` where
-        not pinned (every other configuration is returned unchanged and draws nothing)."""
-        return self if self.pick is None else replace(self, pick=self.pick.for_episode(rng))
+        """The configuration of one episode: the family's per-episode choices (a pick layout's target and
+        phrasing) drawn from ``rng`` where not pinned (a plain task's configuration is returned unchanged
+        and draws nothing)."""
+        if self.content is None:
+            return self
+        return replace(self, content=family_of(self.task).for_episode(self.content, rng))
 
     def episode_record(self, object_offset: Any) -> dict[str, Any]:
-        """What an episode of this (episode) configuration records besides its factors: a pick episode's
-        instruction, target and objects (``{"pick": ...}``); nothing for other tasks."""
-        if self.pick is None:
+        """What an episode of this (episode) configuration records besides its factors, under the family's
+        content key (a pick episode's instruction, target and objects: ``{"pick": ...}``); nothing for
+        other tasks."""
+        family = family_of(self.task)
+        if self.content is None or not family.content_key:
             return {}
-        from ..pick.layout import episode_record
-
-        return {"pick": episode_record(self.pick, object_offset)}
+        return {family.content_key: family.episode_record(self.content, object_offset)}
 
     def with_factors(self, **values: Any) -> SceneConfig:
         return replace(self, factors=self.factors.set(**values))
 
     def to_dict(self) -> dict[str, Any]:
+        key = family_of(self.task).content_key
         return {
             "task": self.task,
             "factors": self.factors.to_dict(),
             "instruction": self.instruction,
             "split": self.split,
             "env_id": self.env_id,
-            **({"pick": self.pick.to_dict()} if self.pick is not None else {}),
+            **({key: self.content.to_dict()} if self.content is not None else {}),
         }
 
     @classmethod
     def from_dict(cls, data: dict[str, Any]) -> SceneConfig:
-        unknown = set(data) - {f.name for f in fields(cls)}
-        if unknown:
-            raise ValueError(f"unknown SceneConfig keys {sorted(unknown)}; valid keys: {[f.name for f in fields(cls)]}")
         values = dict(data)
+        key = family_of(values["task"]).content_key if "task" in values else ""
+        valid = [f.name for f in fields(cls) if f.name != "content"] + ([key] if key else [])
+        unknown = set(values) - set(valid)
+        if unknown:
+            raise ValueError(f"unknown SceneConfig keys {sorted(unknown)}; valid keys: {valid}")
+        if key and key in values:
+            values["content"] = values.pop(key)
         values["factors"] = FactorValues.from_dict(values.get("factors") or {})
         return cls(**values)
 
@@ -174,11 +163,8 @@ class SceneConfig:
         lines = [f"SceneConfig {self.env_id or '(unnamed)'}: task={self.task} split={self.split}"]
         for name, value in self.factors.non_default().items():
             lines.append(f"  {name:15s} {_format(value)}")
-        if self.pick is not None:
-            lines.append(f"  {'pick objects':15s} {', '.join(self.pick.names)}")
-            lines.append(
-                f"  {'pick target':15s} {self.pick.target or 'per episode: ' + ', '.join(self.pick.candidates)}"
-            )
+        if self.content is not None:
+            lines.extend(f"  {label:15s} {text}" for label, text in family_of(self.task).describe(self.content))
         if len(lines) == 1:
             lines.append("  (default scene)")
         return "\n".join(lines)
@@ -186,12 +172,7 @@ class SceneConfig:
 
 def save_configs(configs: list[SceneConfig] | tuple[SceneConfig, ...], path: str | Path) -> Path:
     """Write configurations as a JSON list (atomically: a crash never leaves half a file)."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_suffix(path.suffix + ".tmp")
-    tmp.write_text(json.dumps([c.to_dict() for c in configs], indent=1, sort_keys=True))
-    tmp.replace(path)
-    return path
+    return atomic_write_json(path, [c.to_dict() for c in configs], indent=1, sort_keys=True)
 
 
 def load_configs(path: str | Path) -> list[SceneConfig]:

@@ -1,5 +1,5 @@
-"""The pick family's only contact with Meta-World internals (as :mod:`lerobot_factorworld.envs.metaworld_bridge`
-is for the other tasks): Meta-World's pick-place env class, on a pick scene.
+"""The pick family's only contact with Meta-World internals: Meta-World's pick-place env class, on a pick
+scene, adopted through :mod:`lerobot_factorworld.envs.metaworld` like every other task's.
 
 What changes from pick-place:
 
@@ -21,25 +21,17 @@ import mujoco
 import numpy as np
 from gymnasium.spaces import Box
 
+from ..envs.metaworld import adopt, adopted_class, move_hand
 from ..scene.build import TABLE_CENTER
 from ..tasks import TaskSpec
 from .catalog import HOLD_STEPS, LIFT_HEIGHT, LIFT_MARGIN, WRONG_LIFT_HEIGHT, get_object
 from .layout import PickLayout, PlacedObject
 from .scene import body_name, joint_name
 
-_NO_TRUNCATION = 10**9  # FactorWorldEnv truncates itself
 GOAL_BOX = Box(np.array([-1.0, 0.0, 0.0]), np.array([1.0, 1.5, 0.6]), dtype=np.float64)  # where a lift goal can be
 
 
-@cache
-def _env_class(metaworld_name: str) -> type:
-    from metaworld.env_dict import ALL_V3_ENVIRONMENTS
-
-    base = ALL_V3_ENVIRONMENTS[metaworld_name]
-
-    def _initialize_simulation(self) -> tuple[mujoco.MjModel, mujoco.MjData]:
-        return self._factorworld_model, mujoco.MjData(self._factorworld_model)
-
+def _pick_methods(base: type) -> dict[str, Any]:
     def _get_pos_objects(self) -> np.ndarray:
         return self.data.body(self._pick_target_body).xpos.copy()
 
@@ -101,39 +93,35 @@ def _env_class(metaworld_name: str) -> type:
         }
         return float(success), info
 
-    return type(
-        f"FactorWorldPick{base.__name__}",
-        (base,),
-        {
-            "_initialize_simulation": _initialize_simulation,
-            "_get_pos_objects": _get_pos_objects,
-            "_get_quat_objects": _get_quat_objects,
-            "_get_id_main_object": _get_id_main_object,
-            "reset_model": reset_model,
-            "evaluate_state": evaluate_state,
-            "_target_site_config": property(lambda self: []),  # no goal marker in a pick scene
-        },
-    )
+    return {
+        "_get_pos_objects": _get_pos_objects,
+        "_get_quat_objects": _get_quat_objects,
+        "_get_id_main_object": _get_id_main_object,
+        "reset_model": reset_model,
+        "evaluate_state": evaluate_state,
+        "_target_site_config": property(lambda self: []),  # no goal marker in a pick scene
+    }
+
+
+@cache
+def _env_class(metaworld_name: str) -> type:
+    return adopted_class(metaworld_name, "FactorWorldPick", _pick_methods)
 
 
 def make_pick_env(task: TaskSpec, model: mujoco.MjModel, layout: PickLayout) -> Any:
     """A Meta-World env simulating the pick scene ``model`` (compiled from ``layout``'s objects)."""
-    cls = _env_class(task.metaworld_name)
-    env = cls.__new__(cls)
-    env._factorworld_model = model
-    env._pick_objects = layout.objects
-    env._pick_target = layout.objects[0].name  # until the first episode names one
-    env._pick_target_body = body_name(env._pick_target)
-    env._pick_rest, env._pick_hold, env._pick_wrong = {}, 0, ""
-    env.__init__()
-    env.goal_space = GOAL_BOX
-    env._partially_observable = False  # the expert reads the lift goal from the state vector
-    env.__dict__.pop("sawyer_observation_space", None)
-    env._set_task_called = True
-    env._freeze_rand_vec = True
-    env.max_path_length = _NO_TRUNCATION
-    env._factorworld_default_hand = np.array(env.init_config["hand_init_pos"], dtype=np.float64)
-    return env
+    first = layout.objects[0].name  # the named object until the first episode names one
+    return adopt(
+        _env_class(task.metaworld_name),
+        model,
+        goal_space=GOAL_BOX,  # the expert reads the lift goal from the state vector
+        _pick_objects=layout.objects,
+        _pick_target=first,
+        _pick_target_body=body_name(first),
+        _pick_rest={},
+        _pick_hold=0,
+        _pick_wrong="",
+    )
 
 
 def reset_pick(env: Any, objects: tuple[PlacedObject, ...], target: str, arm_offset) -> np.ndarray:
@@ -141,6 +129,6 @@ def reset_pick(env: Any, objects: tuple[PlacedObject, ...], target: str, arm_off
     env._pick_objects = objects
     env._pick_target = target
     env._pick_target_body = body_name(target)
-    env.hand_init_pos = env._factorworld_default_hand + np.asarray(arm_offset, dtype=np.float64)
+    move_hand(env, arm_offset)
     obs, _ = env.reset()
     return obs

@@ -19,8 +19,13 @@ import re
 from dataclasses import dataclass
 from functools import cache
 
+from ..assets.library import SPLITS_SEED, split_pool
+from ..core.splits import check_split
+from ..tasks import get_task
+
 PICK_TASK = "pick"
 """The family's task name (``factorworld tasks``, ``--env.task=pick``)."""
+_ROW = get_task(PICK_TASK)
 
 # --- success rule ------------------------------------------------------------------------------
 
@@ -32,8 +37,8 @@ LIFT_MARGIN = 0.03
 """The lift goal (the state vector's goal slot) lies this much above the success height."""
 WRONG_LIFT_HEIGHT = 0.02
 """An other object whose centre rises this much above its rest has been lifted: the episode fails."""
-MAX_EPISODE_STEPS = 200
-"""Horizon: the scripted expert needs about 80 steps (docs/pick.md's expert table: 80-86 on average)."""
+MAX_EPISODE_STEPS = _ROW.max_episode_steps
+"""Horizon (the task row's): the scripted expert needs about 80 steps."""
 
 # --- scene size ----------------------------------------------------------------------------------
 
@@ -187,14 +192,10 @@ def referents(text: str, names: tuple[str, ...] | list[str]) -> list[str]:
 
 # --- splits ------------------------------------------------------------------------------------
 
-SPLITS = ("train", "eval")
-
 
 @cache
 def object_split() -> dict[str, tuple[str, ...]]:
     """``{"train": names, "eval": names}``: held-out objects are new (shape, colour) pairs."""
-    from ..assets.library import SPLITS_SEED, split_pool
-
     split = split_pool(list(OBJECTS), "shape", SPLITS_SEED)
     for kind, values in (("shape", SHAPES), ("colour", COLOURS)):
         seen = {getattr(OBJECTS[n], kind) for n in split["train"]}
@@ -205,8 +206,6 @@ def object_split() -> dict[str, tuple[str, ...]]:
 @cache
 def phrasing_split() -> dict[str, tuple[str, ...]]:
     """``{"train": templates, "eval": templates}`` (held-out phrasings), in :data:`TEMPLATES` order."""
-    from ..assets.library import SPLITS_SEED, split_pool
-
     split = split_pool(list(TEMPLATES), "shape", SPLITS_SEED)
     ordered = {k: tuple(t for t in TEMPLATES if t in v) for k, v in split.items()}
     fields = {f for t in ordered["train"] for f in _FIELDS.findall(t)}
@@ -215,34 +214,22 @@ def phrasing_split() -> dict[str, tuple[str, ...]]:
 
 
 def split_objects(split: str) -> tuple[str, ...]:
-    _check_split(split)
+    check_split(split)
     return object_split()[split]
 
 
 def split_templates(split: str) -> tuple[str, ...]:
-    _check_split(split)
+    check_split(split)
     return phrasing_split()[split]
-
-
-def _check_split(split: str) -> None:
-    if split not in SPLITS:
-        raise ValueError(f"unknown split {split!r}; valid splits: {', '.join(SPLITS)}")
 
 
 # --- the task row's facts ------------------------------------------------------------------------
 
-DEFAULT_INSTRUCTION = "pick up the named object"
+DEFAULT_INSTRUCTION = _ROW.instruction
 """The task row's instruction, shown by ``factorworld tasks``; every episode gets its own instruction."""
 
 LOOKALIKE_FAMILIES: tuple[str, ...] = tuple(sorted({s.asset_family for s in SHAPES.values()}))
 """Procedural shape families no distractor is drawn from in pick scenes."""
 
-UNSUPPORTED_FACTORS: tuple[tuple[str, str], ...] = tuple(
-    (
-        factor,
-        "pick objects are told apart by shape family and colour, which the instruction names; "
-        "resizing or reshaping them would change what the instruction refers to",
-    )
-    for factor in ("object_size", "object_shape")
-)
-"""Factors that do not apply to the family, with the reason (shown by the support checks)."""
+UNSUPPORTED_FACTORS: tuple[tuple[str, str], ...] = _ROW.unsupported
+"""Factors that do not apply to the family, with the reason (the task row's)."""

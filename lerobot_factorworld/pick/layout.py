@@ -10,23 +10,29 @@ of its objects named, and a policy has to read the instruction to succeed.
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import asdict, dataclass, replace
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 
+from ..core.splits import check_split
+from ..factors.registry import get_factor
 from .catalog import (
     DEFAULT_OBJECTS,
     MAX_OBJECTS,
     MIN_OBJECTS,
+    SHAPES,
     SLOT_JITTER,
     SLOTS,
-    SPLITS,
     TEMPLATES,
     get_object,
     render,
+    split_objects,
     split_templates,
 )
+
+MAX_TRIES = 200
 
 
 @dataclass(frozen=True)
@@ -70,6 +76,9 @@ class PickLayout:
         template: The phrasing template; empty: drawn every episode from ``phrasings``.
     """
 
+    kind: ClassVar[str] = "pick layout"  # what error messages call it
+    family: ClassVar[str] = "pick"
+
     objects: tuple[PlacedObject, ...]
     targets: tuple[str, ...] = ()
     phrasings: str = "train"
@@ -97,8 +106,7 @@ class PickLayout:
             raise ValueError(f"target(s) {strays} are not in the scene; its objects: {', '.join(names)}")
         if self.target and self.targets and self.target not in self.targets:
             raise ValueError(f"target {self.target!r} is not one of the layout's targets {list(self.targets)}")
-        if self.phrasings not in SPLITS:
-            raise ValueError(f"unknown phrasings split {self.phrasings!r}; valid: {', '.join(SPLITS)}")
+        check_split(self.phrasings, "phrasings split")
         if self.template and self.template not in TEMPLATES:
             raise ValueError(f"unknown phrasing template {self.template!r}; valid templates: {list(TEMPLATES)}")
 
@@ -170,9 +178,6 @@ def episode_record(layout: PickLayout, offset: tuple[float, float]) -> dict[str,
 
 def default_layout() -> PickLayout:
     """The default scene: the first train objects with distinct shapes and colours, in the first slots."""
-    from .catalog import split_objects
-    from .sampling import choose_objects
-
     names = choose_objects(None, split_objects("train"), (), DEFAULT_OBJECTS)
     return PickLayout(tuple(PlacedObject(name, *SLOTS[i]) for i, name in enumerate(names)))
 
@@ -207,11 +212,43 @@ def workspace_keepout(clearance: float) -> tuple[float, float, float, float]:
     """The box (table frame: xmin, ymin, xmax, ymax) any pick object can reach: every slot, its jitter,
     the largest footprint and the widest arrangement offset (``object_pos``), plus ``clearance``.
     Distractors stand outside it, so they never block a grasp."""
-    from ..factors.registry import get_factor
-    from .catalog import SHAPES
-
     spec = get_factor("object_pos")
     low, high = spec.widest
     reach = max(math.hypot(*s.footprint) for s in SHAPES.values()) + SLOT_JITTER + clearance
     xs, ys = [x for x, _ in SLOTS], [y for _, y in SLOTS]
     return (min(xs) + low[0] - reach, min(ys) + low[1] - reach, max(xs) + high[0] + reach, max(ys) + high[1] + reach)
+
+
+def choose_objects(
+    rng: np.random.Generator | None, primary: Sequence[str], fill: Sequence[str], k: int
+) -> tuple[str, ...]:
+    """``k`` objects with distinct shapes and colours: as many from ``primary`` as fit, then from ``fill``.
+
+    With ``rng`` the pools are shuffled (a few greedy passes keep the largest set found); without it
+    they are taken in order (the default scene).
+    """
+    best: tuple[str, ...] = ()
+    for _ in range(MAX_TRIES if rng is not None else 1):
+        first = list(primary) if rng is None else [primary[i] for i in rng.permutation(len(primary))]
+        chosen = _greedy(first, [], k)
+        if len(chosen) > len(best):
+            best = tuple(chosen)
+        if len(best) == k:
+            break
+    if len(best) < k:
+        rest = list(fill) if rng is None else [fill[i] for i in rng.permutation(len(fill))]
+        best = tuple(_greedy(rest, list(best), k))
+    if len(best) < k:
+        raise ValueError(f"cannot find {k} objects with distinct shapes and colours in the pools")
+    return best
+
+
+def _greedy(pool: Sequence[str], chosen: list[str], k: int) -> list[str]:
+    chosen = list(chosen)
+    for name in pool:
+        if len(chosen) == k:
+            break
+        obj = get_object(name)
+        if all(get_object(c).shape != obj.shape and get_object(c).colour != obj.colour for c in chosen):
+            chosen.append(name)
+    return chosen

@@ -18,54 +18,20 @@ from dataclasses import replace
 
 import numpy as np
 
-from .catalog import SLOT_JITTER, SLOTS, SPLITS, get_object, split_objects
-from .layout import PickLayout, PlacedObject
+from ..core.splits import SPLITS
+from ..families import family_of
+from .catalog import SLOT_JITTER, SLOTS, get_object, split_objects
+from .layout import PickLayout, PlacedObject, choose_objects
 
 LAYOUT_STREAM = 1_000  # beyond every factor's index in ``factor_rng``
 HELD_OUT_PHRASINGS = "held_out_phrasings"
 HELD_OUT_OBJECTS = "held_out_objects"
 CONDITIONS = (HELD_OUT_PHRASINGS, HELD_OUT_OBJECTS)
 """The language-generalization conditions (``--env.shifts='[held_out_phrasings,held_out_objects]'``)."""
-MAX_TRIES = 200
 
 
 def layout_rng(seed: int, split: str, *extra: int) -> np.random.Generator:
     return np.random.default_rng([seed, SPLITS.index(split), LAYOUT_STREAM, *extra])
-
-
-def choose_objects(
-    rng: np.random.Generator | None, primary: Sequence[str], fill: Sequence[str], k: int
-) -> tuple[str, ...]:
-    """``k`` objects with distinct shapes and colours: as many from ``primary`` as fit, then from ``fill``.
-
-    With ``rng`` the pools are shuffled (a few greedy passes keep the largest set found); without it
-    they are taken in order (the default scene).
-    """
-    best: tuple[str, ...] = ()
-    for _ in range(MAX_TRIES if rng is not None else 1):
-        first = list(primary) if rng is None else [primary[i] for i in rng.permutation(len(primary))]
-        chosen = _greedy(first, [], k)
-        if len(chosen) > len(best):
-            best = tuple(chosen)
-        if len(best) == k:
-            break
-    if len(best) < k:
-        rest = list(fill) if rng is None else [fill[i] for i in rng.permutation(len(fill))]
-        best = tuple(_greedy(rest, list(best), k))
-    if len(best) < k:
-        raise ValueError(f"cannot find {k} objects with distinct shapes and colours in the pools")
-    return best
-
-
-def _greedy(pool: Sequence[str], chosen: list[str], k: int) -> list[str]:
-    chosen = list(chosen)
-    for name in pool:
-        if len(chosen) == k:
-            break
-        obj = get_object(name)
-        if all(get_object(c).shape != obj.shape and get_object(c).colour != obj.colour for c in chosen):
-            chosen.append(name)
-    return chosen
 
 
 def _poses(rng: np.random.Generator, names: Sequence[str], slots: Sequence[int]) -> tuple[PlacedObject, ...]:
@@ -121,9 +87,7 @@ def held_out_objects(layouts: Sequence[PickLayout], seed: int) -> list[PickLayou
 
 def check_condition(condition: str, tasks: Sequence[str]) -> None:
     """A language condition applies to pick tasks only (the error names them)."""
-    from ..tasks import get_task
-
-    others = [t for t in tasks if get_task(t).family != "pick"]
+    others = [t for t in tasks if condition not in family_of(t).conditions]
     if others:
         raise ValueError(
             f"condition {condition!r} applies to the pick family only (its held-out phrasings and objects), "
@@ -137,11 +101,11 @@ def language_shift(base: Sequence, condition: str, n: int, seed: int) -> list:
     if condition not in CONDITIONS:
         raise ValueError(f"unknown language condition {condition!r}; valid: {', '.join(CONDITIONS)}")
     parents = [base[j % len(base)] for j in range(n)]
-    if any(p.pick is None for p in parents):
+    if any(p.content is None for p in parents):
         check_condition(condition, sorted({p.task for p in parents}))
-    layouts = [p.pick for p in parents]
+    layouts = [p.content for p in parents]
     layouts = held_out_phrasings(layouts) if condition == HELD_OUT_PHRASINGS else held_out_objects(layouts, seed)
     return [
-        replace(parent, pick=layout, split="eval", env_id=f"{parent.task}/{condition}/{j:03d}")
+        replace(parent, content=layout, split="eval", env_id=f"{parent.task}/{condition}/{j:03d}")
         for j, (parent, layout) in enumerate(zip(parents, layouts, strict=True))
     ]

@@ -14,6 +14,7 @@ from __future__ import annotations
 import mujoco
 import numpy as np
 
+from ..assets import load_texture
 from ..scene.build import TABLE_CENTER, TEXTURE_SIZE
 from .catalog import get_object
 from .layout import PlacedObject
@@ -67,8 +68,6 @@ def _add_object(spec: mujoco.MjSpec, item: PlacedObject, texture: str | None) ->
 
 
 def _tinted_texture(spec: mujoco.MjSpec, material, value: str, rgb: tuple[float, float, float]) -> None:
-    from ..assets import load_texture
-
     image = load_texture(value, TEXTURE_SIZE).astype(np.float64) / 255.0
     luminance = image @ np.array([0.299, 0.587, 0.114])
     shade = TINT_FLOOR + (1.0 - TINT_FLOOR) * luminance

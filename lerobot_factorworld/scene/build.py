@@ -20,6 +20,9 @@ from typing import Literal
 import mujoco
 import numpy as np
 
+from ..assets import load_mesh, load_texture
+from ..assets.scenes import VISIBLE_GROUPS, metaworld_xml
+from ..core.checks import check_choice
 from ..factors.registry import parse_rgb
 from ..factors.values import FactorValues, SceneObject
 from ..tasks import TaskSpec, get_task
@@ -34,7 +37,6 @@ FLOOR_GEOM = "floor"
 TABLE_MATERIAL = "table_wood"
 FLOOR_MATERIAL = "basic_floor"
 TEXTURE_SIZE = 128
-VISIBLE_GROUPS = (0, 1, 2)  # geom groups MuJoCo renders by default
 DEFAULT_HEADLIGHT = (0.4, 0.4)  # Meta-World's headlight (ambient, diffuse)
 
 
@@ -46,13 +48,6 @@ class ObjectGeometry:
     dims: tuple[float, float, float]  # its bounding-box sides along x, y, z
     bottom: float  # lowest point of that geometry relative to the root body origin (z, metres)
     mass: float  # total mass of the object's subtree, kg
-
-
-def metaworld_xml(task: TaskSpec) -> str:
-    from metaworld.env_dict import ALL_V3_ENVIRONMENTS
-
-    cls = ALL_V3_ENVIRONMENTS[task.metaworld_name]
-    return cls.model_name.fget(None)  # the property only joins a constant path
 
 
 def load_task_spec(task: TaskSpec) -> mujoco.MjSpec:
@@ -71,7 +66,7 @@ def object_geometry(task_name: str) -> ObjectGeometry:
     for g in _subtree_geoms(model, task.object_bodies):
         if not (model.geom_contype[g] or model.geom_conaffinity[g]):
             continue
-        corners = _geom_world_corners(model, data, g)
+        corners = geom_world_corners(model, data, g)
         lows.append(corners.min(axis=0))
         highs.append(corners.max(axis=0))
     low, high = np.min(lows, axis=0), np.max(highs, axis=0)
@@ -172,8 +167,6 @@ def _move_robot_side(spec: mujoco.MjSpec, offset: np.ndarray) -> None:
 
 
 def _texture_data(name: str, cube: bool) -> tuple[int, int, bytes]:
-    from ..assets import load_texture
-
     image = np.ascontiguousarray(load_texture(name, TEXTURE_SIZE), dtype=np.uint8)
     if cube:  # MuJoCo stores a cube texture as six square faces stacked vertically
         image = np.concatenate([image] * 6, axis=0)
@@ -220,8 +213,6 @@ def _reshape_object(spec: mujoco.MjSpec, task: TaskSpec, shape: str | None, scal
     if shape is None:
         _scale_subtree(spec, task.object_bodies, scale)
         return
-    from ..assets import load_mesh
-
     mesh = load_mesh(shape)
     main = next((g for g in geoms if g.name == "objGeom"), None) or next(g for g in geoms if g.contype or g.conaffinity)
     root = spec.body(task.object_bodies[0])
@@ -294,8 +285,6 @@ def _scale_subtree(spec: mujoco.MjSpec, roots: tuple[str, ...], scale: float) ->
 
 
 def _add_scene_object(spec: mujoco.MjSpec, name: str, item: SceneObject) -> None:
-    from ..assets import load_mesh
-
     mesh = load_mesh(item.shape)
     spec.add_mesh(
         name=f"{name}_mesh",
@@ -371,8 +360,12 @@ def _subtree_geoms(model: mujoco.MjModel, roots: tuple[str, ...]) -> list[int]:
     return out
 
 
-def _geom_world_corners(model: mujoco.MjModel, data: mujoco.MjData, g: int) -> np.ndarray:
+def geom_world_corners(model: mujoco.MjModel, data: mujoco.MjData, g: int) -> np.ndarray:
     center, half = model.geom_aabb[g][:3], model.geom_aabb[g][3:]
     signs = np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)], float)
     local = center + signs * half
     return data.geom_xpos[g] + local @ data.geom_xmat[g].reshape(3, 3).T
+
+
+def check_quality(quality: str) -> None:
+    check_choice("quality", quality, QUALITIES)

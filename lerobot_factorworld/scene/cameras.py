@@ -6,9 +6,13 @@ them). Images are upright, unlike Meta-World's ``corner2`` which LeRobot has to 
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 
+import mujoco
 import numpy as np
+
+from ..core.checks import split_list
 
 
 @dataclass(frozen=True)
@@ -24,8 +28,6 @@ class CameraSpec:
 
 
 def look_at_quat(pos: np.ndarray, target: np.ndarray) -> np.ndarray:
-    import mujoco
-
     forward = target - pos
     forward /= np.linalg.norm(forward)
     right = np.cross(forward, np.array([0.0, 0.0, 1.0]))
@@ -62,3 +64,15 @@ def check_camera_names(names: tuple[str, ...] | list[str], allow_none: bool = Fa
     if unknown or (not names and not allow_none) or len(set(names)) != len(names):
         raise ValueError(f"bad camera list {names!r}; valid cameras: {', '.join(CAMERAS)} (each at most once)")
     return names
+
+
+def check_cameras(cameras: str | Sequence[str], setting: str = "cameras") -> tuple[str, ...]:
+    """Camera names (comma-separated) -> tuple; at least one, each once, all known."""
+    names = split_list(cameras)
+    try:
+        return check_camera_names(names)
+    except ValueError:
+        raise ValueError(
+            f"bad {setting} {','.join(names) or '(none)'!s}; valid cameras: {', '.join(CAMERAS)} "
+            "(at least one, each at most once, comma-separated)"
+        ) from None

@@ -15,11 +15,16 @@ import os
 import re
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any
 
+import draccus
+
 from ..factors.registry import PAPER_STUDY_FACTORS, WIDTHS, check_task_support, get_factor
+from ..families import all_families, condition_family, family_of
+from ..protocol.conditions import PAIR_SEPARATOR, condition_name, parse_shift
+from ..protocol.sampling import SamplingOptions
 from ..tasks import get_task
-from .conditions import PAIR_SEPARATOR, condition_name, parse_shift
 
 EXECUTORS = ("local", "ray")
 ALL_PAIRS = "all"
@@ -28,7 +33,6 @@ RADII_M = {"narrow": 0.025, "medium": 0.05, "wide": 0.075}  # the paper's radii 
 PATH_SUFFIXES = ("_path", "_root")  # settings named like this are local paths: resolved when the config is read
 WEIGHTS_SUFFIX = "weights_path"  # ... and these name weight files that must exist before a study starts
 DEVICE_PATTERN = re.compile(r"cpu|mps|cuda(:\d+)?")
-PICK_FAMILY = "pick"
 
 
 def is_path_setting(name: str) -> bool:
@@ -120,10 +124,12 @@ class MethodConfig:
 
 def check_policy(method: MethodConfig) -> None:
     """The method's policy type exists and accepts its overrides (as ``lerobot-train`` will parse them)."""
-    import draccus
-    from lerobot.configs.policies import PreTrainedConfig
+    # Deliberately here: importing LeRobot (and the policy configs that register bc and rt1) costs seconds,
+    # and only a study's validation needs it, not every importer of this module.
+    from lerobot.configs.policies import PreTrainedConfig  # noqa: PLC0415
 
-    from .. import lerobot_plugin  # noqa: F401 - registers bc and rt1
+    from ..policies.bc import configuration_bc  # noqa: F401, PLC0415 - registers bc
+    from ..policies.rt1 import configuration_rt1  # noqa: F401, PLC0415 - registers rt1
 
     kind = method.policy["type"]
     if kind not in PreTrainedConfig.get_known_choices():
@@ -157,8 +163,8 @@ class CollectSettings:
         object_pos_width: Range of the per-episode object start (``narrow`` / ``medium``), for
             collection and evaluation alike.
         n_distractors: Distractor objects per environment.
-        n_objects: Objects on the table in a ``pick`` family scene (3 to 6; ``None``: the catalogue's
-            default); refused for other tasks.
+        n_objects: Objects on the table per scene, for the task families that read it (their
+            ``sampling_options``; ``None``: the sampling default); refused for other tasks.
         workers: Worker processes of one collection.
     """
 
@@ -177,13 +183,14 @@ class CollectSettings:
     def demos_for(self, task: str) -> int:
         return int(self.demos_per_task.get(task, self.demos))
 
-    def n_objects_for(self, task: str) -> int | None:
-        """Objects per scene for a pick family task (the catalogue's default unless set); ``None`` otherwise."""
-        from ..factors.sampling import PICK_OBJECTS
-
-        if get_task(task).family != PICK_FAMILY:
-            return None
-        return PICK_OBJECTS[1] if self.n_objects is None else int(self.n_objects)
+    def family_options_for(self, task: str) -> dict[str, Any]:
+        """The sampling options ``task``'s family reads (``SamplingOptions`` fields named in its
+        ``sampling_options``), each as set here or the sampling default; ``{}`` for a plain task."""
+        defaults = SamplingOptions()
+        return {
+            name: getattr(defaults, name) if getattr(self, name) is None else getattr(self, name)
+            for name in family_of(task).sampling_options
+        }
 
 
 @dataclass
@@ -246,8 +253,8 @@ class StudyConfig:
         n_train_envs: The N values (training environments per dataset).
         seeds: Seeds; seed ``s`` samples the training and test environments and seeds training.
         train_factors: Factors varied across the training environments (the paper's seven).
-        factors: Single-factor conditions; for ``pick`` family tasks also the language conditions
-            ``held_out_phrasings`` and ``held_out_objects`` (they stand alone: no pairs, no training factor).
+        factors: Single-factor conditions; also the conditions a task family adds (its ``conditions``,
+            e.g. held-out phrasings and objects), which stand alone: no pairs, no training factor.
         pairs: Pair conditions: ``[all]`` (every pair of the factors in ``factors``) or a list of ``a+b``.
         radius_factors: Factors of the radius sweep (``camera_pos``, ``table_pos``).
         radius_widths: Widths of the sweep: narrow / medium / wide = radius 0.025 / 0.05 / 0.075 m.
@@ -286,15 +293,13 @@ class StudyConfig:
 
     # --- derived -----------------------------------------------------------------------------
 
-    def language_conditions(self) -> list[str]:
-        """The pick family's language conditions listed in ``factors`` (held-out phrasings / objects)."""
-        from ..pick.sampling import CONDITIONS
-
-        return [f for f in self.factors if f in CONDITIONS]
+    def family_conditions(self) -> list[str]:
+        """The task families' own conditions listed in ``factors`` (e.g. held-out phrasings / objects)."""
+        return [f for f in self.factors if condition_family(f) is not None]
 
     def shifted_factors(self) -> list[str]:
-        """The factors of ``factors`` (without the language conditions)."""
-        return [f for f in self.factors if f not in self.language_conditions()]
+        """The factors of ``factors`` (without the families' conditions)."""
+        return [f for f in self.factors if condition_family(f) is None]
 
     def pair_conditions(self) -> list[str]:
         if [p.strip() for p in self.pairs] == [ALL_PAIRS]:
@@ -333,7 +338,7 @@ class StudyConfig:
             if width not in RADII_M:
                 raise ValueError(f"unknown radius width {width!r}; valid: {', '.join(RADII_M)}")
         get_factor("object_pos").range(self.collect.object_pos_width)  # raises naming the valid widths
-        self._validate_n_objects()
+        self._validate_family_options()
         check_device("train.device", self.train.device)
         check_device("eval.device", self.eval.device)
         if self.executor not in EXECUTORS:
@@ -349,14 +354,12 @@ class StudyConfig:
             raise ValueError("train.steps must be at least 1 (or set train.epochs)")
 
     def _validate_conditions(self) -> None:
-        """Factors apply to every task and are varied in training; language conditions need pick tasks."""
-        from ..pick.sampling import CONDITIONS, check_condition
-
+        """Factors apply to every task and are varied in training; a family's conditions need its tasks."""
         duplicates = sorted({f for f in self.factors if self.factors.count(f) > 1})
         if duplicates:
             raise ValueError(f"factors lists {', '.join(duplicates)} more than once")
-        for condition in self.language_conditions():
-            check_condition(condition, self.tasks)  # "applies to the pick family only, not to door-open"
+        for condition in self.family_conditions():
+            condition_family(condition).check_condition(condition, self.tasks)  # "applies to the x family only"
         shifted = self.shifted_factors()
         for task in self.tasks:
             check_task_support(get_task(task), [*self.train_factors, *shifted, *self.radius_factors])
@@ -367,10 +370,9 @@ class StudyConfig:
             )
         for pair in self.pairs:
             named = [part.strip() for part in pair.split(PAIR_SEPARATOR)]
-            if any(part in CONDITIONS for part in named):
-                raise ValueError(
-                    f"pair {pair!r}: the language conditions {', '.join(CONDITIONS)} stand alone (list them in factors)"
-                )
+            if any(condition_family(part) is not None for part in named):
+                own = [c for family in all_families() for c in family.conditions]
+                raise ValueError(f"pair {pair!r}: the conditions {', '.join(own)} stand alone (list them in factors)")
         for pair in self.pair_conditions():
             if any(f not in shifted for f in pair.split(PAIR_SEPARATOR)):
                 raise ValueError(f"pair {pair!r} names a factor that is not in factors {shifted}")
@@ -393,24 +395,26 @@ class StudyConfig:
                 )
             seen[settings] = method.name
 
-    def _validate_n_objects(self) -> None:
-        if self.collect.n_objects is None:
-            return
-        others = [t for t in self.tasks if get_task(t).family != PICK_FAMILY]
-        if others:
-            raise ValueError(
-                f"collect.n_objects applies to the pick family only (objects on the table), not to {', '.join(others)}"
-            )
-        from ..factors.sampling import PICK_OBJECTS
-
-        low, high = PICK_OBJECTS[0], PICK_OBJECTS[2]
-        if not low <= self.collect.n_objects <= high:
-            raise ValueError(f"collect.n_objects must be in [{low}, {high}], got {self.collect.n_objects}")
+    def _validate_family_options(self) -> None:
+        """A family's sampling option (``collect.n_objects``) is set only for tasks of families that read
+        it, and within the range ``SamplingOptions`` accepts."""
+        for family in all_families():
+            for name in family.sampling_options:
+                value = getattr(self.collect, name)
+                if value is None:
+                    continue
+                others = [t for t in self.tasks if name not in family_of(t).sampling_options]
+                if others:
+                    raise ValueError(
+                        f"collect.{name} applies to the {family.name} family only, not to {', '.join(others)}"
+                    )
+                try:
+                    SamplingOptions(**{name: value})
+                except ValueError as err:
+                    raise ValueError(f"collect.{err}") from None
 
     def missing_weight_files(self) -> list[str]:
         """``method 'x': <setting> <path>`` for every weights file a method names that does not exist."""
-        from pathlib import Path
-
         missing = []
         for method in self.methods:
             for name, path in policy_paths(method.policy).items():

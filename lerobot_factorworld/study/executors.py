@@ -52,8 +52,8 @@ class RayExecutor:
     leave its task pending forever, so the steps are checked against the cluster before any is submitted."""
 
     def __init__(self, study_dir: str, workers: int, address: str | None = None, steps: Sequence[Step] = ()) -> None:
-        try:
-            import ray
+        try:  # deliberately here: ray is an optional dependency, needed only by this executor
+            import ray  # noqa: PLC0415
         except ImportError:
             raise ValueError("executor=ray needs the ray package: pip install 'ray>=2.40'") from None
         self.ray = ray

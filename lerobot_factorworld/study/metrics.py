@@ -6,7 +6,9 @@
 - the paper's pair metric (P_{A+B} - min(P_A, P_B)) / min(P_A, P_B), and the interaction
   gap(A+B) - gap(A) - gap(B);
 - mean and standard error over training seeds;
-- the factor ordering (hardest first) and its Spearman correlation with the paper's.
+- the factor ordering (hardest first) and Spearman's rank correlation.
+
+The paper's own numbers, which these are compared with, are in ``paper.py``.
 """
 
 from __future__ import annotations
@@ -15,50 +17,6 @@ import math
 from collections.abc import Mapping, Sequence
 
 Z95 = 1.959963984540054  # two-sided 95% normal quantile
-
-PAPER_FACTOR_RANKS: dict[str, float] = {
-    # Section 5.1 of the paper (sim, narrow ranges), with Fig. 3a's finer reading. The text states:
-    # table texture and camera position are harder than background, distractors and lighting;
-    # background is harder than distractors and lighting; object texture ~ camera position; table
-    # position ~ table texture. Ranking {camera position, object texture} above {table position, table
-    # texture} is our reading of Fig. 3a (the figure is not in the notes), not the text's: the report
-    # also gives the correlation with PAPER_FACTOR_RANKS_STATED. Ties share the average rank; 1 = largest gap.
-    "camera_pos": 1.5,
-    "object_texture": 1.5,
-    "table_pos": 3.5,
-    "table_texture": 3.5,
-    "floor_texture": 5.0,
-    "light": 6.5,
-    "distractors": 6.5,
-}
-PAPER_FACTOR_RANKS_STATED: dict[str, float] = {
-    # Only what section 5.1's text states: the four hard factors tied, then background, then lighting and
-    # distractors (tied).
-    "camera_pos": 2.5,
-    "object_texture": 2.5,
-    "table_pos": 2.5,
-    "table_texture": 2.5,
-    "floor_texture": 5.0,
-    "light": 6.5,
-    "distractors": 6.5,
-}
-
-
-PAPER_REAL_ROBOT: dict[str, tuple[str, float | None]] = {
-    # Section 5.1's real-robot success rates (RT-1 with crop + photometric augmentation, 12 trials per
-    # factor), by the Factor World condition that plays the factor's part in the pick family; the two
-    # language conditions have no counterpart in the paper.
-    "train": ("original", 91.7),
-    "floor_texture": ("new background", 88.9),
-    "distractors": ("new distractors", 80.6),
-    "light": ("new lighting", 83.3),
-    "table_texture": ("new table texture", 52.8),
-    "camera_pos": ("new camera pose", 45.8),
-    "table_texture+floor_texture": ("table texture + background", 55.6),
-    "table_texture+distractors": ("table texture + distractors", 50.0),
-    "held_out_phrasings": ("held-out phrasings", None),
-    "held_out_objects": ("held-out objects", None),
-}
 
 
 def wilson_interval(successes: int, n: int, z: float = Z95) -> tuple[float, float]:
@@ -158,8 +116,8 @@ def spearman(ranks_a: Mapping[str, float], ranks_b: Mapping[str, float]) -> floa
     keys = [k for k in ranks_a if k in ranks_b]
     if len(keys) < 3:
         return math.nan
-    xs = list(_rerank([ranks_a[k] for k in keys]))
-    ys = list(_rerank([ranks_b[k] for k in keys]))
+    xs = list(rerank([ranks_a[k] for k in keys]))
+    ys = list(rerank([ranks_b[k] for k in keys]))
     mx, my = sum(xs) / len(xs), sum(ys) / len(ys)
     sxy = sum((x - mx) * (y - my) for x, y in zip(xs, ys))
     sxx = sum((x - mx) ** 2 for x in xs)
@@ -169,7 +127,7 @@ def spearman(ranks_a: Mapping[str, float], ranks_b: Mapping[str, float]) -> floa
     return sxy / math.sqrt(sxx * syy)
 
 
-def _rerank(values: Sequence[float]) -> list[float]:
+def rerank(values: Sequence[float]) -> list[float]:
     """Average ranks (1 = smallest) of ``values``."""
     order = sorted(range(len(values)), key=lambda i: values[i])
     ranks = [0.0] * len(values)

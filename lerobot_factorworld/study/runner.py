@@ -8,16 +8,19 @@ only redoes what failed. One run of a study folder at a time (a lock file guards
 from __future__ import annotations
 
 import fcntl
-import json
 import os
 import shlex
 import sys
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
+from tqdm import tqdm
+
+from ..core.io import atomic_write_json
 from .config import StudyConfig
+from .cost import describe
 from .executors import make_executor
-from .plan import Plan, describe, make_plan
+from .plan import Plan, make_plan
 from .report import write_report
 from .steps import KINDS, Step, is_done
 
@@ -48,16 +51,16 @@ def run_study(cfg: StudyConfig, command: str | None = None) -> StudyOutcome | st
     study_dir.mkdir(parents=True, exist_ok=True)
     command = command or "factorworld study " + " ".join(shlex.quote(a) for a in sys.argv[2:])
     with _lock(study_dir):
-        _write(study_dir / CONFIG_FILE, asdict(cfg))
-        _write(study_dir / PLAN_FILE, [s.to_dict() for s in plan.steps])
+        atomic_write_json(study_dir / CONFIG_FILE, asdict(cfg), indent=1, sort_keys=True, default=str)
+        atomic_write_json(
+            study_dir / PLAN_FILE, [s.to_dict() for s in plan.steps], indent=1, sort_keys=True, default=str
+        )
         outcome = _execute(cfg, plan, study_dir)
         outcome.results, outcome.report, outcome.plots = write_report(cfg, plan, study_dir, command)
     return outcome
 
 
 def _execute(cfg: StudyConfig, plan: Plan, study_dir: Path) -> StudyOutcome:
-    from tqdm import tqdm
-
     outcome = StudyOutcome(study_dir)
     todo = [s for s in plan.steps if not is_done(s, study_dir)]
     for kind in KINDS:
@@ -132,9 +135,3 @@ class _lock:
     def __exit__(self, *exc) -> None:
         fcntl.flock(self.file, fcntl.LOCK_UN)
         self.file.close()
-
-
-def _write(path: Path, data) -> None:
-    tmp = path.with_suffix(path.suffix + ".tmp")
-    tmp.write_text(json.dumps(data, indent=1, sort_keys=True, default=str))
-    tmp.replace(path)

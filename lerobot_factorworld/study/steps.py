@@ -28,6 +28,14 @@ from importlib import metadata
 from pathlib import Path
 from typing import Any
 
+from .. import __version__  # the package root registers the env and policy types (in a fresh worker too)
+from ..core.io import atomic_write_text
+from ..families import family_of
+from ..protocol.conditions import TRAIN_SUITE, fingerprint
+from ..protocol.coverage import coverage
+from ..protocol.sampling import SamplingOptions
+from .inputs import CollectInputs, EvalInputs, TrainInputs
+
 KINDS = ("collect", "train", "eval")
 STEP_FORMAT = 2  # bump when a step's meaning changes: every key changes with it (2: versions, content hashes)
 RESULT_FILE = "result.json"
@@ -48,8 +56,6 @@ def versions() -> dict[str, str]:
 
     A code change without a version bump is not detected (bump ``STEP_FORMAT`` or the package version).
     """
-    from .. import __version__
-
     out = {"lerobot_factorworld": _version(DISTRIBUTION, __version__)}
     out.update({name: _version(name, "unknown") for name in VERSIONED})
     return out
@@ -155,21 +161,19 @@ def _portable(result: dict[str, Any], study_dir: Path) -> dict[str, Any]:
 def run_step(step_data: dict[str, Any], study_dir: str) -> dict[str, Any]:
     """Run one step (in a worker process or a Ray task) and return its result. Idempotent."""
     os.environ.setdefault("MUJOCO_GL", "egl")
-    import lerobot_factorworld  # noqa: F401 - registers the env and policy types in this (fresh) process
-
     step = Step.from_dict(step_data)
     folder = step.folder(study_dir)
     if (folder / RESULT_FILE).is_file():
         return read_result(folder)
     folder.mkdir(parents=True, exist_ok=True)
-    _atomic_write(folder / INPUTS_FILE, json.dumps(step.to_dict(), indent=1, sort_keys=True))
+    atomic_write_text(folder / INPUTS_FILE, json.dumps(step.to_dict(), indent=1, sort_keys=True))
     deps = [_dep_folder(study_dir, key) for key in step.deps]
     start = time.perf_counter()
     with _output_to(folder / LOG_FILE):  # progress bars of collection and evaluation go to the step's log
         result = RUNNERS[step.kind](step, folder, deps)
     result["seconds"] = round(time.perf_counter() - start, 2)
     stored = _portable(result, Path(study_dir))
-    _atomic_write(folder / RESULT_FILE, json.dumps(stored, indent=1, sort_keys=True))
+    atomic_write_text(folder / RESULT_FILE, json.dumps(stored, indent=1, sort_keys=True))
     return result
 
 
@@ -208,23 +212,28 @@ def _dep_of_kind(deps: list[Path], kind: str) -> Path:
 # --- collect ------------------------------------------------------------------------------------
 
 
-def collect_config(inputs: dict[str, Any], root: Path, key: str, workers: int = 1):
-    from ..datasets.collect import CollectConfig
-    from ..factors.sampling import SamplingOptions
+def collect_config(inputs: CollectInputs | dict[str, Any], root: Path, key: str, workers: int = 1):
+    """The ``factorworld collect`` settings of a collect step."""
+    # Deliberately here: the collection module imports LeRobot (about 2 s), which planning and reporting
+    # never need.
+    from ..datasets.collect import CollectConfig  # noqa: PLC0415
 
-    n_objects = {} if inputs.get("n_objects") is None else {"n_objects": int(inputs["n_objects"])}  # pick family
-    sampling = SamplingOptions(widths=dict(inputs["widths"]), n_distractors=inputs["n_distractors"], **n_objects)
+    if not isinstance(inputs, CollectInputs):
+        inputs = CollectInputs.from_dict(inputs)
+    sampling = SamplingOptions(
+        widths=dict(inputs.widths), n_distractors=inputs.n_distractors, **dict(inputs.family_options)
+    )
     return CollectConfig(
-        task=inputs["task"],
-        factors=list(inputs["train_factors"]),
-        n_envs=inputs["n_envs"],
-        demos=inputs["demos"],
-        seed=inputs["seed"],
-        cameras=inputs["cameras"],
-        image_size=inputs["image_size"],
-        action_noise=inputs["action_noise"],
-        max_episode_steps=inputs["max_episode_steps"],
-        use_videos=inputs["use_videos"],
+        task=inputs.task,
+        factors=list(inputs.train_factors),
+        n_envs=inputs.n_envs,
+        demos=inputs.demos,
+        seed=inputs.seed,
+        cameras=inputs.cameras,
+        image_size=inputs.image_size,
+        action_noise=inputs.action_noise,
+        max_episode_steps=inputs.max_episode_steps,
+        use_videos=inputs.use_videos,
         root=str(root),
         repo_id=f"local/factorworld_{key}",
         workers=workers,
@@ -234,13 +243,14 @@ def collect_config(inputs: dict[str, Any], root: Path, key: str, workers: int = 
 
 
 def _run_collect(step: Step, folder: Path, deps: list[Path]) -> dict[str, Any]:
-    from ..datasets.collect import SIDECAR, collect
+    # Deliberately here: LeRobot's dataset code (seconds to import), only in the process that collects.
+    from lerobot.datasets.lerobot_dataset import LeRobotDatasetMetadata  # noqa: PLC0415
+
+    from ..datasets.collect import SIDECAR, collect  # noqa: PLC0415
 
     root = folder / DATA_DIR
     cfg = collect_config(step.inputs, root, step.key, step.run.get("workers", 1))
     if (root / SIDECAR).is_file():  # merged before an interruption: nothing left to do
-        from lerobot.datasets.lerobot_dataset import LeRobotDatasetMetadata
-
         meta = LeRobotDatasetMetadata(cfg.repo_id, root=root)
         return {
             "root": str(root),
@@ -274,18 +284,18 @@ def policy_args(policy: dict[str, Any], prefix: str = "--policy") -> list[str]:
     return args
 
 
-def train_steps(inputs: dict[str, Any], frames: int) -> int:
+def train_steps(inputs: TrainInputs, frames: int) -> int:
     """Gradient steps: ``steps``, or ``ceil(epochs * frames / batch_size)`` when ``epochs`` is set."""
-    if inputs.get("epochs") is None:
-        return int(inputs["steps"])
-    return max(1, math.ceil(inputs["epochs"] * frames / inputs["batch_size"]))
+    if inputs.epochs is None:
+        return int(inputs.steps)
+    return max(1, math.ceil(inputs.epochs * frames / inputs.batch_size))
 
 
 def _run_train(step: Step, folder: Path, deps: list[Path]) -> dict[str, Any]:
     data = read_result(_dep_of_kind(deps, "collect"))
-    inputs = step.inputs
-    policy = step.run.get("policy", inputs["policy"])  # absolute paths; the key holds their content hashes
-    extra_args = step.run.get("extra_args", inputs["extra_args"])
+    inputs = TrainInputs.from_dict(step.inputs)
+    policy = step.run.get("policy", inputs.policy)  # absolute paths; the key holds their content hashes
+    extra_args = step.run.get("extra_args", list(inputs.extra_args))
     steps = train_steps(inputs, data["frames"])
     out = folder / TRAIN_DIR
     if out.exists():  # an interrupted run: LeRobot refuses an existing output_dir, start over
@@ -295,13 +305,13 @@ def _run_train(step: Step, folder: Path, deps: list[Path]) -> dict[str, Any]:
         "-m",
         "lerobot.scripts.lerobot_train",
         *policy_args(policy),
-        f"--policy.device={inputs['device']}",
+        f"--policy.device={inputs.device}",
         "--policy.push_to_hub=false",
         f"--dataset.repo_id={data['repo_id']}",
         f"--dataset.root={data['root']}",
         f"--steps={steps}",
-        f"--batch_size={inputs['batch_size']}",
-        f"--seed={inputs['seed']}",
+        f"--batch_size={inputs.batch_size}",
+        f"--seed={inputs.seed}",
         "--num_workers=0",
         f"--save_freq={steps}",
         f"--log_freq={max(1, steps // 10)}",
@@ -309,7 +319,7 @@ def _run_train(step: Step, folder: Path, deps: list[Path]) -> dict[str, Any]:
         f"--output_dir={out}",
         *extra_args,
     ]
-    threads = str(inputs["threads"])
+    threads = str(inputs.threads)
     env = {**os.environ, "OMP_NUM_THREADS": threads, "MKL_NUM_THREADS": threads, "TOKENIZERS_PARALLELISM": "false"}
     with open(folder / LOG_FILE, "a") as log:
         log.write(" ".join(cmd) + "\n")
@@ -327,54 +337,52 @@ def _run_train(step: Step, folder: Path, deps: list[Path]) -> dict[str, Any]:
 # --- eval ---------------------------------------------------------------------------------------
 
 
-def eval_env_config(collect_inputs: dict[str, Any], data_root: str, inputs: dict[str, Any]):
+def eval_env_config(collect: CollectInputs, data_root: str, inputs: EvalInputs):
     """The ``factorworld`` env config of one condition: its ``train`` condition is the dataset's."""
-    from ..envs.configs import FactorWorldEnvConfig
-    from .conditions import TRAIN_SUITE
+    # Deliberately here: the env config subclasses LeRobot's (about 4 s to import); planning never needs it.
+    from ..adapters.env_config import FactorWorldEnvConfig  # noqa: PLC0415
 
-    condition = inputs["condition"]
-    is_train = condition == TRAIN_SUITE
-    n_test_envs = {} if is_train else {"n_test_envs": inputs["n_test_envs"]}  # train: the dataset's own
+    is_train = inputs.condition == TRAIN_SUITE
+    n_test_envs = {} if is_train else {"n_test_envs": inputs.n_test_envs}  # train: the dataset's own
     return FactorWorldEnvConfig(
-        task=collect_inputs["task"],
-        cameras=collect_inputs["cameras"],
-        image_size=collect_inputs["image_size"],
-        episode_length=inputs["max_episode_steps"],
+        task=collect.task,
+        cameras=collect.cameras,
+        image_size=collect.image_size,
+        episode_length=inputs.max_episode_steps,
         dataset_root=data_root,
-        shifts=[] if is_train else [condition],
+        shifts=[] if is_train else [inputs.condition],
         include_train=is_train,
         **n_test_envs,
     )
 
 
 def _run_eval(step: Step, folder: Path, deps: list[Path]) -> dict[str, Any]:
-    import torch
-    from lerobot.configs.policies import PreTrainedConfig
-    from lerobot.envs.factory import make_env, make_env_pre_post_processors
-    from lerobot.policies.factory import make_policy, make_pre_post_processors
-    from lerobot.scripts.lerobot_eval import eval_policy_all
-    from lerobot.utils.import_utils import register_third_party_plugins
-    from lerobot.utils.random_utils import set_seed
-
-    from ..pick.records import episode_records
-    from .conditions import coverage, fingerprint
+    # Deliberately here: torch and LeRobot's evaluation stack (seconds to import), only in the process
+    # that evaluates.
+    import torch  # noqa: PLC0415
+    from lerobot.configs.policies import PreTrainedConfig  # noqa: PLC0415
+    from lerobot.envs.factory import make_env, make_env_pre_post_processors  # noqa: PLC0415
+    from lerobot.policies.factory import make_policy, make_pre_post_processors  # noqa: PLC0415
+    from lerobot.scripts.lerobot_eval import eval_policy_all  # noqa: PLC0415
+    from lerobot.utils.import_utils import register_third_party_plugins  # noqa: PLC0415
+    from lerobot.utils.random_utils import set_seed  # noqa: PLC0415
 
     register_third_party_plugins()  # as lerobot-eval does: Factor World's env and policy types, and any other plugin
 
-    inputs, run = step.inputs, step.run
+    inputs, run = EvalInputs.from_dict(step.inputs), step.run
     torch.set_num_threads(run.get("threads", 1))
     collect_folder = _dep_of_kind(deps, "collect")
-    collect_inputs = json.loads((collect_folder / INPUTS_FILE).read_text())["inputs"]
+    collect_inputs = CollectInputs.from_dict(json.loads((collect_folder / INPUTS_FILE).read_text())["inputs"])
     data = read_result(collect_folder)
     checkpoint = read_result(_dep_of_kind(deps, "train"))["checkpoint"]
     env_cfg = eval_env_config(collect_inputs, data["root"], inputs)
     task = env_cfg.task_names[0]
-    configs = env_cfg.suites(task)[inputs["condition"]]
+    configs = env_cfg.suites(task)[inputs.condition]
 
     policy_cfg = PreTrainedConfig.from_pretrained(checkpoint)
     policy_cfg.pretrained_path = Path(checkpoint)
-    policy_cfg.device = _eval_device(inputs.get("device", "cpu"))
-    set_seed(inputs["start_seed"])
+    policy_cfg.device = _eval_device(inputs.device)
+    set_seed(inputs.start_seed)
     policy = make_policy(cfg=policy_cfg, env_cfg=env_cfg)
     preprocessor, postprocessor = make_pre_post_processors(
         policy_cfg=policy_cfg,
@@ -391,30 +399,33 @@ def _run_eval(step: Step, folder: Path, deps: list[Path]) -> dict[str, Any]:
             env_post,
             preprocessor,
             postprocessor,
-            n_episodes=inputs["episodes"],
+            n_episodes=inputs.episodes,
             max_episodes_rendered=0,
-            start_seed=inputs["start_seed"],
+            start_seed=inputs.start_seed,
         )
     successes = [bool(s) for s in info["per_task"][0]["metrics"]["successes"]]
-    seeds = [inputs["start_seed"] + i for i in range(len(successes))]
+    seeds = [inputs.start_seed + i for i in range(len(successes))]
     cover = coverage(seeds, len(configs))
-    return {
-        "condition": inputs["condition"],
+    width = env_cfg.sampling.widths.get("object_pos")
+    result = {
+        "condition": inputs.condition,
         "successes": successes,
         "seeds": seeds,
         "n_envs": len(configs),
         "envs_visited": cover.visited,
         "equal_visits": cover.equal,
-        "fingerprint": fingerprint(configs, env_cfg.sampling.widths.get("object_pos")),
+        "fingerprint": fingerprint(configs, width),
         "checkpoint": checkpoint,
-        # pick family: what every episode asked for (instruction, named object), for per-object breakdowns
-        "pick": episode_records(configs, seeds, env_cfg.sampling.widths.get("object_pos")),
     }
+    family = family_of(task)
+    if family.content_key:  # what every episode asked for (e.g. instruction, named object), for breakdowns
+        result[family.content_key] = family.episode_records(configs, seeds, width)
+    return result
 
 
 def _eval_device(device: str) -> str:
     """``eval.device``, refused when this machine lacks it (rather than silently running elsewhere)."""
-    import torch
+    import torch  # noqa: PLC0415 - deliberately here: only the evaluating process needs torch (seconds to import)
 
     if device.startswith("cuda") and not torch.cuda.is_available():
         raise RuntimeError(f"eval.device={device} but this machine has no CUDA device; use --eval.device=cpu")
@@ -424,10 +435,3 @@ def _eval_device(device: str) -> str:
 
 
 RUNNERS = {"collect": _run_collect, "train": _run_train, "eval": _run_eval}
-
-
-def _atomic_write(path: Path, text: str) -> None:
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_suffix(path.suffix + f".tmp{os.getpid()}")
-    tmp.write_text(text)
-    tmp.replace(path)

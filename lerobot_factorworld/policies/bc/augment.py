@@ -13,10 +13,8 @@ import torch
 from torch import Tensor, nn
 from torchvision.transforms import ColorJitter
 
-from ..rt1.modeling_rt1 import random_shift
+from ..common.augment import random_shift
 from .configuration_bc import AUGMENTATIONS
-
-__all__ = ["ImageAugmentation", "random_shift"]
 
 
 class ImageAugmentation(nn.Module):

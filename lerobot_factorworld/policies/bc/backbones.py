@@ -8,8 +8,9 @@
   (``{"r3m": state_dict}`` with keys ``module.convnet.*``; ``module.lang_enc.*`` / ``module.lang_rew.*``
   are dropped, as R3M's own loader does).
 
-A file with missing, unknown or wrongly shaped keys is refused with an error that lists them. Each
-backbone takes images (N, 3, H, W) in [0, 1] and applies its own published preprocessing.
+A file with missing, unknown or wrongly shaped keys is refused with an error that lists them
+(``common/weights.py``). Each backbone takes images (N, 3, H, W) in [0, 1] and applies its own published
+preprocessing.
 """
 
 from __future__ import annotations
@@ -20,19 +21,16 @@ from pathlib import Path
 import torch
 import torch.nn.functional as F  # noqa: N812
 from torch import Tensor, nn
+from torchvision.models import resnet50
 
-from ..rt1.film_efficientnet import IMAGENET_MEAN, IMAGENET_STD, LITE0_STAGES, LITE_MEAN, LITE_STD, LiteNet
-from ..rt1.film_efficientnet import load_lite0_imagenet as _load_lite0_imagenet
+from ..common.efficientnet_lite import LITE0_STAGES, LiteNet, load_lite0_imagenet
+from ..common.image_stats import IMAGENET_MEAN, IMAGENET_STD, LITE_MEAN, LITE_STD
+from ..common.weights import SHOWN_KEYS, WeightsError, compare_keys, listing, local_weights_file, read_torch_file
 
 R3M_KEY = "r3m"
 R3M_PREFIX = "module.convnet."
 R3M_DROPPED_PREFIXES = ("module.lang_enc.", "module.lang_rew.")
 CLIP_VISUAL_PREFIX = "visual."
-SHOWN_KEYS = 12  # keys listed per category in a refusal
-
-
-class WeightsError(ValueError):
-    """A weights file that does not fit the backbone (missing, unexpected or wrongly shaped keys)."""
 
 
 @dataclass(frozen=True)
@@ -47,7 +45,7 @@ class Preprocess:
 
 
 def _clip_stats() -> tuple[tuple[float, ...], tuple[float, ...]]:
-    from open_clip.constants import OPENAI_DATASET_MEAN, OPENAI_DATASET_STD
+    from open_clip.constants import OPENAI_DATASET_MEAN, OPENAI_DATASET_STD  # noqa: PLC0415  open_clip: clip_rn50 only
 
     return tuple(OPENAI_DATASET_MEAN), tuple(OPENAI_DATASET_STD)
 
@@ -85,13 +83,8 @@ class FrozenBackbone(nn.Module):
 
     @torch.no_grad()
     def forward(self, images: Tensor) -> Tensor:  # (N, 3, H, W) in [0, 1] -> (N, out_dim)
-        x = self.prepare(images)
-        if isinstance(self.net, LiteNet):
-            h = self.net.stem(x)
-            for block in self.net._blocks:
-                h = block(h)
-            return self.net.head(h).mean(dim=(2, 3))
-        return self.net(x)
+        features = self.net(self.prepare(images))
+        return features.mean(dim=(2, 3)) if self.pool else features
 
 
 def build_backbone(name: str, weights_path: str | None, load_weights: bool) -> FrozenBackbone:
@@ -99,7 +92,7 @@ def build_backbone(name: str, weights_path: str | None, load_weights: bool) -> F
     if name == "lite0":
         net = LiteNet(LITE0_STAGES)
         if load_weights:
-            _load_lite0_imagenet(net)
+            load_lite0_imagenet(net)
         return FrozenBackbone(net, Preprocess(224, 224, "bilinear", LITE_MEAN, LITE_STD), net.out_channels, True)
     if name == "clip_rn50":
         net = clip_rn50_image_tower()
@@ -121,23 +114,20 @@ def _weights_file(name: str, weights_path: str | None) -> Path:
         "clip_rn50": "an open_clip RN50 state dict (open_clip_pytorch_model.bin, .safetensors or .pt)",
         "r3m_rn50": "R3M's ResNet-50 model.pt",
     }[name]
-    if not weights_path:
-        raise ValueError(
-            f"encoder {name} needs --policy.encoder_weights_path=<{expected}>: its weights are never downloaded "
-            "(encoder=lite0 has pretrained weights that ship with a package)"
-        )
-    path = Path(weights_path).expanduser()
-    if not path.is_file():
-        raise FileNotFoundError(f"encoder {name}: weights file not found: {path}")
-    return path
+    return local_weights_file(
+        weights_path,
+        f"encoder {name}",
+        f"--policy.encoder_weights_path=<{expected}>: its weights are never downloaded "
+        "(encoder=lite0 has pretrained weights that ship with a package)",
+    )
 
 
 # --- architectures -------------------------------------------------------------------------------
 
 
 def _clip_rn50_config() -> dict:
-    try:
-        import open_clip
+    try:  # open_clip is only needed by encoder clip_rn50; a missing one gets an install hint
+        import open_clip  # noqa: PLC0415
     except ImportError as err:
         raise ImportError("encoder clip_rn50 needs `pip install open-clip-torch`") from err
     return open_clip.get_model_config("RN50")
@@ -145,7 +135,7 @@ def _clip_rn50_config() -> dict:
 
 def clip_rn50_image_tower() -> nn.Module:
     """CLIP RN50's image tower (open_clip's ModifiedResNet, 1024-d output), randomly initialised."""
-    from open_clip.model import _build_vision_tower
+    from open_clip.model import _build_vision_tower  # noqa: PLC0415  open_clip: clip_rn50 only
 
     cfg = _clip_rn50_config()
     return _build_vision_tower(cfg["embed_dim"], cfg["vision_cfg"])
@@ -153,7 +143,7 @@ def clip_rn50_image_tower() -> nn.Module:
 
 def _clip_rn50_text_keys() -> dict[str, torch.Size]:
     """Shapes of CLIP RN50's non-image keys (built on the meta device: no memory, no init cost)."""
-    from open_clip.model import CLIP
+    from open_clip.model import CLIP  # noqa: PLC0415  open_clip: clip_rn50 only
 
     with torch.device("meta"):
         full = CLIP(**_clip_rn50_config())
@@ -162,8 +152,6 @@ def _clip_rn50_text_keys() -> dict[str, torch.Size]:
 
 def r3m_resnet50() -> nn.Module:
     """R3M's ResNet-50 (torchvision's, classifier removed: 2048-d output), randomly initialised."""
-    from torchvision.models import resnet50
-
     net = resnet50(weights=None)
     net.fc = nn.Identity()  # R3M replaces the classifier: the 2048-d pooled feature is the embedding
     return net
@@ -172,35 +160,15 @@ def r3m_resnet50() -> nn.Module:
 # --- strict loading ------------------------------------------------------------------------------
 
 
-def _listing(title: str, keys: list[str]) -> str:
-    shown = ", ".join(keys[:SHOWN_KEYS]) + (f", ... ({len(keys) - SHOWN_KEYS} more)" if len(keys) > SHOWN_KEYS else "")
-    return f"{title} ({len(keys)}): {shown}"
-
-
 def load_strict(net: nn.Module, state: dict[str, Tensor], source: Path, what: str) -> None:
     """Load ``state`` into ``net``, refusing any missing, unexpected or wrongly shaped key.
 
     BatchNorm's ``num_batches_tracked`` counters may be absent (they do not affect eval-mode outputs).
     """
     own = net.state_dict()
-    missing = sorted(k for k in own if k not in state and not k.endswith("num_batches_tracked"))
-    unexpected = sorted(k for k in state if k not in own)
-    mismatched = sorted(
-        f"{k} {tuple(v.shape)} (expected {tuple(own[k].shape)})"
-        for k, v in state.items()
-        if k in own and v.shape != own[k].shape
-    )
-    if missing or unexpected or mismatched:
-        problems = [
-            _listing(title, keys)
-            for title, keys in (
-                ("missing keys", missing),
-                ("unexpected keys", unexpected),
-                ("wrong shapes", mismatched),
-            )
-            if keys
-        ]
-        raise WeightsError(f"{source} is not {what}: " + "; ".join(problems))
+    report = compare_keys(own, state, may_be_missing=lambda key: key.endswith("num_batches_tracked"))
+    if report:
+        raise WeightsError(f"{source} is not {what}: {report}")
     kept = {k: v for k, v in state.items() if k in own}
     for key in own:
         kept.setdefault(key, own[key])  # only absent num_batches_tracked counters reach this
@@ -208,7 +176,7 @@ def load_strict(net: nn.Module, state: dict[str, Tensor], source: Path, what: st
 
 
 def load_clip_rn50(net: nn.Module, path: Path) -> None:
-    from open_clip.factory import load_state_dict
+    from open_clip.factory import load_state_dict  # noqa: PLC0415  open_clip: clip_rn50 only
 
     try:
         state = load_state_dict(str(path))  # .safetensors or torch file; unwraps "state_dict" and "module."
@@ -218,26 +186,14 @@ def load_clip_rn50(net: nn.Module, path: Path) -> None:
         raise WeightsError(f"{path} is not an open_clip RN50 state dict (found a {type(state).__name__})")
     visual = {k[len(CLIP_VISUAL_PREFIX) :]: v for k, v in state.items() if k.startswith(CLIP_VISUAL_PREFIX)}
     others = {k: v for k, v in state.items() if not k.startswith(CLIP_VISUAL_PREFIX)}
-    text_keys = _clip_rn50_text_keys()
-    unknown = sorted(k for k in others if k not in text_keys)
-    mismatched = sorted(
-        f"{k} {tuple(v.shape)} (expected {tuple(text_keys[k])})"
-        for k, v in others.items()
-        if k in text_keys and tuple(v.shape) != tuple(text_keys[k])
-    )
-    if unknown or mismatched:
-        problems = [
-            _listing(t, keys) for t, keys in (("unexpected keys", unknown), ("wrong shapes", mismatched)) if keys
-        ]
-        raise WeightsError(f"{path} is not an open_clip RN50 state dict: " + "; ".join(problems))
+    text = compare_keys(_clip_rn50_text_keys(), others, may_be_missing=lambda key: True)  # the text tower is unused
+    if text:
+        raise WeightsError(f"{path} is not an open_clip RN50 state dict: {text}")
     load_strict(net, visual, path, "an open_clip RN50 state dict (image tower keys 'visual.*')")
 
 
 def load_r3m_rn50(net: nn.Module, path: Path) -> None:
-    try:
-        payload = torch.load(path, map_location="cpu", weights_only=True)
-    except Exception as err:  # noqa: BLE001
-        raise WeightsError(f"{path} could not be read as R3M's model.pt: {err}") from err
+    payload = read_torch_file(path, "R3M's model.pt")
     if not isinstance(payload, dict) or not isinstance(payload.get(R3M_KEY), dict):
         found = sorted(payload)[:SHOWN_KEYS] if isinstance(payload, dict) else type(payload).__name__
         raise WeightsError(f"{path} is not R3M's model.pt: expected a dict with key {R3M_KEY!r}, found {found}")
@@ -247,6 +203,6 @@ def load_r3m_rn50(net: nn.Module, path: Path) -> None:
     if unknown:
         raise WeightsError(
             f"{path} is not R3M's ResNet-50 model.pt: "
-            + _listing(f"unexpected keys (expected '{R3M_PREFIX}*', or language-head keys)", unknown)
+            + listing(f"unexpected keys (expected '{R3M_PREFIX}*', or language-head keys)", unknown)
         )
     load_strict(net, convnet, path, f"R3M's ResNet-50 model.pt (keys '{R3M_PREFIX}*')")

@@ -12,6 +12,8 @@ from dataclasses import dataclass, field
 from lerobot.configs import FeatureType, NormalizationMode, PreTrainedConfig
 from lerobot.optim import AdamConfig
 
+from ..common.config import default_normalization_mapping, require_images_and_action
+
 # encoder -> (trained from scratch?, embedding size, input side in pixels; None: the dataset's own size)
 ENCODERS: dict[str, tuple[bool, int, int | None]] = {
     "conv": (True, 128, None),  # the paper's 4-layer CNN -> linear 128 -> LayerNorm -> tanh
@@ -65,13 +67,7 @@ class BCConfig(PreTrainedConfig):
     use_language: bool = False
     optimizer_lr: float = 3e-4
     optimizer_weight_decay: float = 0.0
-    normalization_mapping: dict[str, NormalizationMode] = field(
-        default_factory=lambda: {
-            "VISUAL": NormalizationMode.IDENTITY,  # images stay in [0, 1]; each encoder normalises its own way
-            "STATE": NormalizationMode.MEAN_STD,
-            "ACTION": NormalizationMode.MIN_MAX,  # to [-1, 1], the range the head's output is clamped to
-        }
-    )
+    normalization_mapping: dict[str, NormalizationMode] = field(default_factory=default_normalization_mapping)
 
     def __post_init__(self) -> None:
         super().__post_init__()
@@ -112,10 +108,7 @@ class BCConfig(PreTrainedConfig):
         return ENCODERS[self.encoder][2]
 
     def validate_features(self) -> None:
-        if not self.image_features:
-            raise ValueError("bc needs at least one image feature (observation.image or observation.images.*)")
-        if self.action_feature is None:
-            raise ValueError("bc needs an 'action' output feature")
+        require_images_and_action(self, "bc")
         for key, feature in self.image_features.items():
             if feature.type is not FeatureType.VISUAL or len(feature.shape) != 3 or feature.shape[0] != 3:
                 raise ValueError(f"{key} must be an RGB image feature of shape (3, H, W), got {feature.shape}")

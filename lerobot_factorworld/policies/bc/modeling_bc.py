@@ -6,24 +6,18 @@ action out: ``observation.state`` already carries the previous step's end-effect
 
 from __future__ import annotations
 
-from contextvars import ContextVar
-
 import torch
 import torch.nn.functional as F  # noqa: N812
 from lerobot.policies.pretrained import PreTrainedPolicy
 from lerobot.utils.constants import ACTION, OBS_STATE
 from torch import Tensor, nn
 
-from ..rt1.configuration_rt1 import LANGUAGE_EMBEDDING_KEY
-from ..rt1.processor_rt1 import MINILM_DIM
+from ..common.language import LANGUAGE_EMBEDDING_KEY, MINILM_DIM
+from ..common.weights import RestoresBackboneFromCheckpoint
 from .augment import ImageAugmentation
 from .backbones import build_backbone
 from .configuration_bc import BCConfig
 from .encoders import ConvEncoder, PretrainedEncoder
-
-# True while ``from_pretrained`` builds a policy whose weights (the frozen encoder's included) come from the
-# checkpoint: the original weights file is then neither needed nor read.
-_FROM_CHECKPOINT: ContextVar[bool] = ContextVar("bc_from_checkpoint", default=False)
 
 
 def mlp(in_dim: int, hidden: int, layers: int, out_dim: int) -> nn.Sequential:
@@ -40,7 +34,9 @@ def mlp(in_dim: int, hidden: int, layers: int, out_dim: int) -> nn.Sequential:
 class BCNet(nn.Module):
     """Images (B, 3, H, W) per camera + state (B, S) [+ instruction embedding] -> action (B, A)."""
 
-    def __init__(self, config: BCConfig, camera_keys: list[str], state_dim: int, action_dim: int, load_weights: bool):
+    def __init__(
+        self, config: BCConfig, camera_keys: list[str], state_dim: int, action_dim: int, load_backbone_weights: bool
+    ) -> None:
         super().__init__()
         self.config, self.camera_keys = config, camera_keys
         self.augment = ImageAugmentation(config.augmentation, config.shift_pad, config.color_jitter, config.color_prob)
@@ -50,7 +46,7 @@ class BCNet(nn.Module):
                 image_shape, config.conv_channels, config.conv_kernel, config.conv_stride, config.latent_dim
             )
         else:
-            backbone = build_backbone(config.encoder, config.encoder_weights_path, load_weights)
+            backbone = build_backbone(config.encoder, config.encoder_weights_path, load_backbone_weights)
             self.encoder = PretrainedEncoder(backbone, config.feature_cache_size)
         language_dim = MINILM_DIM if config.use_language else 0
         in_dim = self.encoder.out_dim * len(camera_keys) + state_dim + language_dim
@@ -76,13 +72,26 @@ class BCNet(nn.Module):
         return self.head(torch.cat(parts, dim=-1))
 
 
-class BCPolicy(PreTrainedPolicy):
-    """Behaviour cloning (``--policy.type=bc``): mean-squared error on min-max normalised actions."""
+class BCPolicy(RestoresBackboneFromCheckpoint, PreTrainedPolicy):
+    """Behaviour cloning (``--policy.type=bc``): mean-squared error on min-max normalised actions.
+
+    ``from_pretrained`` takes the frozen encoder from the checkpoint, loaded strictly: its original weights
+    file (``encoder_weights_path``) is not read again, and may be gone.
+    """
 
     config_class = BCConfig
     name = "bc"
 
-    def __init__(self, config: BCConfig, dataset_stats=None, dataset_meta=None, **kwargs) -> None:
+    def __init__(
+        self,
+        config: BCConfig,
+        dataset_stats=None,
+        dataset_meta=None,
+        *,
+        load_backbone_weights: bool = True,
+        **kwargs,
+    ) -> None:
+        """``load_backbone_weights=False`` leaves a frozen encoder random (``from_pretrained`` fills it)."""
         super().__init__(config)
         config.validate_features()
         self.config = config
@@ -93,18 +102,8 @@ class BCPolicy(PreTrainedPolicy):
             self.camera_keys,
             state.shape[0] if state is not None else 0,
             config.action_feature.shape[0],
-            load_weights=not _FROM_CHECKPOINT.get(),
+            load_backbone_weights,
         )
-
-    @classmethod
-    def from_pretrained(cls, *args, **kwargs):
-        """LeRobot's loader; the frozen encoder's weights come from the checkpoint, not from their original file."""
-        kwargs.setdefault("strict", True)  # a checkpoint missing keys must fail, not leave layers random
-        token = _FROM_CHECKPOINT.set(True)
-        try:
-            return super().from_pretrained(*args, **kwargs)
-        finally:
-            _FROM_CHECKPOINT.reset(token)
 
     def get_optim_params(self):
         return [p for p in self.parameters() if p.requires_grad]

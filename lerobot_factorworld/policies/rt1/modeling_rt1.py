@@ -14,7 +14,10 @@ from lerobot.policies.pretrained import PreTrainedPolicy
 from lerobot.utils.constants import ACTION
 from torch import Tensor, nn
 
-from .configuration_rt1 import LANGUAGE_EMBEDDING_KEY, RT1Config
+from ..common.augment import random_shift
+from ..common.language import LANGUAGE_EMBEDDING_KEY
+from ..common.weights import RestoresBackboneFromCheckpoint
+from .configuration_rt1 import RT1Config
 from .film_efficientnet import FiLMEfficientNet
 from .tokenizers import ActionTokenizer, TokenLearner
 from .transformer import RT1Transformer, TransformerSpec
@@ -71,18 +74,6 @@ class RT1(nn.Module):
         return x
 
 
-def random_shift(x: Tensor, pad: int) -> Tensor:
-    """DrQ-style shift: replicate-pad by ``pad`` and crop back at a random offset per image."""
-    n, _, h, w = x.shape
-    padded = F.pad(x, (pad, pad, pad, pad), mode="replicate")
-    dx = torch.randint(0, 2 * pad + 1, (n,), device=x.device)
-    dy = torch.randint(0, 2 * pad + 1, (n,), device=x.device)
-    rows = (dy[:, None] + torch.arange(h, device=x.device)[None]).view(n, 1, h, 1).expand(n, x.shape[1], h, w + 2 * pad)
-    out = padded.gather(2, rows)
-    cols = (dx[:, None] + torch.arange(w, device=x.device)[None]).view(n, 1, 1, w).expand(n, x.shape[1], h, w)
-    return out.gather(3, cols)
-
-
 def random_crop(x: Tensor, scale: float) -> Tensor:
     """A random ``scale`` x ``scale`` crop of each frame (resized back by the caller)."""
     n, _, h, w = x.shape
@@ -111,8 +102,12 @@ def photometric(x: Tensor) -> Tensor:
     return x.clamp(0.0, 1.0)
 
 
-class RT1Policy(PreTrainedPolicy):
-    """RT-1 for LeRobot (``--policy.type=rt1``)."""
+class RT1Policy(RestoresBackboneFromCheckpoint, PreTrainedPolicy):
+    """RT-1 for LeRobot (``--policy.type=rt1``).
+
+    ``from_pretrained`` takes the backbone from the checkpoint alone, loaded strictly: ``backbone_weights_path``
+    (the ImageNet start) is not read again, and may be gone.
+    """
 
     config_class = RT1Config
     name = "rt1"
@@ -140,16 +135,6 @@ class RT1Policy(PreTrainedPolicy):
         self.model = RT1(config, self.camera_keys, self.action_dim, load_backbone_weights)
         self.action_tokenizer = ActionTokenizer(config.action_bins)
         self.reset()
-
-    @classmethod
-    def from_pretrained(cls, pretrained_name_or_path, **kwargs) -> RT1Policy:
-        """LeRobot's loader, but the backbone comes from the checkpoint alone, loaded strictly.
-
-        The checkpoint holds the trained backbone, so ``backbone_weights_path`` (the ImageNet start) is
-        not read again (it may be gone); as nothing else fills the backbone, missing keys must fail.
-        """
-        kwargs.setdefault("strict", True)
-        return super().from_pretrained(pretrained_name_or_path, load_backbone_weights=False, **kwargs)
 
     def get_optim_params(self):
         return self.parameters()

@@ -2,17 +2,15 @@
 
 from __future__ import annotations
 
-from .configuration_rt1 import PRESETS
+import torch
+from lerobot.configs import FeatureType, PolicyFeature
+
+from .configuration_rt1 import PRESETS, RT1Config
+from .modeling_rt1 import RT1Policy
 
 
 def parameter_counts(preset: str, cameras: int = 1, action_dim: int = 4) -> dict[str, int]:
     """Parameters of the whole policy and of its parts, for ``cameras`` cameras and ``action_dim`` actions."""
-    import torch
-    from lerobot.configs import FeatureType, PolicyFeature
-
-    from .configuration_rt1 import RT1Config
-    from .modeling_rt1 import RT1Policy
-
     torch.manual_seed(0)
     features = {f"observation.images.cam{i}": PolicyFeature(FeatureType.VISUAL, (3, 84, 84)) for i in range(cameras)}
     config = RT1Config(

@@ -26,15 +26,13 @@ import numpy as np
 from ..assets import DEFAULT_ASSET_SPLIT, DEFAULT_TABLE_TEXTURE, asset_family, check_asset_split
 from ..assets import split_names as asset_split_names
 from ..assets.scenes import scene_assets, scene_shape_families
-from ..pick.catalog import DEFAULT_OBJECTS, MAX_OBJECTS, MIN_OBJECTS
-from ..tasks import TaskSpec, get_task
-from .registry import (
+from ..core.splits import SPLITS, check_split
+from ..factors.registry import (
     DISTRACTOR_AREA,
     DISTRACTOR_SIZE,
     FACTORS,
     MAX_DISTRACTORS,
     PAPER_STUDY_FACTORS,
-    SPLITS,
     SceneObject,
     check_factor_names,
     check_task_support,
@@ -42,10 +40,12 @@ from .registry import (
     format_rgb,
     get_factor,
 )
-from .values import FactorValues, SceneConfig
+from ..factors.values import FactorValues, SceneConfig
+from ..families import all_families, family_of
+from ..tasks import TaskSpec, get_task
+from . import keepout
 
 MAX_PLACEMENT_TRIES = 2000
-PICK_OBJECTS = (MIN_OBJECTS, DEFAULT_OBJECTS, MAX_OBJECTS)  # objects per pick scene: fewest, default, most
 
 
 @dataclass(frozen=True)
@@ -58,7 +58,8 @@ class SamplingOptions:
         shape_folder: A folder of meshes (.stl/.obj) to draw object shapes and distractors from.
         rgb_fraction: Probability that a texture draw is a flat RGB colour instead of an image.
         n_distractors: Number of distractor objects per environment.
-        n_objects: Objects on the table in a ``pick`` scene (3 to 6); other tasks ignore it.
+        n_objects: Objects on the table in a scene of a family that reads it (its ``sampling_options``;
+            checked by the family); other tasks ignore it.
         asset_split: How assets are split between train and eval: ``family`` (default) holds whole
             families out, so test textures and shapes are unlike any training one (the paper's unseen
             images and objects); ``variant`` splits name by name (new variants of seen families). In a
@@ -71,7 +72,7 @@ class SamplingOptions:
     rgb_fraction: float = 0.0
     n_distractors: int = 1
     asset_split: str = DEFAULT_ASSET_SPLIT
-    n_objects: int = PICK_OBJECTS[1]
+    n_objects: int = 4
 
     def __post_init__(self) -> None:
         check_asset_split(self.asset_split)
@@ -82,15 +83,15 @@ class SamplingOptions:
             raise ValueError(f"rgb_fraction must be in [0, 1], got {self.rgb_fraction}")
         if not 0 <= self.n_distractors <= MAX_DISTRACTORS:
             raise ValueError(f"n_distractors must be in [0, {MAX_DISTRACTORS}], got {self.n_distractors}")
-        if not PICK_OBJECTS[0] <= self.n_objects <= PICK_OBJECTS[2]:
-            raise ValueError(f"n_objects must be in [{PICK_OBJECTS[0]}, {PICK_OBJECTS[2]}], got {self.n_objects}")
+        for family in all_families():  # the options only a task family reads (pick: n_objects)
+            family.check_sampling(self)
         for folder in (self.texture_folder, self.shape_folder):
             if folder is not None and not Path(folder).is_dir():
                 raise FileNotFoundError(f"asset folder {folder} does not exist")
 
 
 def factor_rng(seed: int, split: str, factor: str, *extra: int) -> np.random.Generator:
-    return np.random.default_rng([seed, SPLITS.index(_check_split(split)), list(FACTORS).index(factor), *extra])
+    return np.random.default_rng([seed, SPLITS.index(check_split(split)), list(FACTORS).index(factor), *extra])
 
 
 def sample_factor(
@@ -122,7 +123,7 @@ def _sample(
     task = task if isinstance(task, TaskSpec) else get_task(task)
     spec = get_factor(name)
     check_task_support(task, [name])
-    _check_split(split)
+    check_split(split)
     if spec.kind in ("vector", "scalar"):
         low, high = factor_range(task, name, options.widths.get(name))
         value = tuple(float(v) for v in rng.uniform(low, high))
@@ -187,14 +188,10 @@ def sample_configs(
     if n < 1:
         raise ValueError(f"the number of environments must be at least 1, got {n}")
     values = sample_factor_values(task, factors, n, seed, split, options)
-    layouts: list[Any] = [None] * n
-    if task.family == "pick":  # the objects on the table and what episodes name: their own seeded stream
-        from ..pick.sampling import sample_layouts
-
-        layouts = sample_layouts(n, seed, split, (options or SamplingOptions()).n_objects)
+    contents = family_of(task).sample_contents(task, n, seed, split, options or SamplingOptions())
     return [
-        SceneConfig(task.name, v, split=split, env_id=f"{task.name}/{split}/{i:03d}", pick=layout)
-        for i, (v, layout) in enumerate(zip(values, layouts, strict=True))
+        SceneConfig(task.name, v, split=split, env_id=f"{task.name}/{split}/{i:03d}", content=content)
+        for i, (v, content) in enumerate(zip(values, contents, strict=True))
     ]
 
 
@@ -224,12 +221,6 @@ def shift_configs(
         replaced = parent.factors.set(**{name: getattr(values, name) for name in factors})
         out.append(replace(parent, factors=replaced, split=split, env_id=f"{task.name}/shift-{tag}/{j:03d}"))
     return out
-
-
-def _check_split(split: str) -> str:
-    if split not in SPLITS:
-        raise ValueError(f"unknown split {split!r}; valid splits: {', '.join(SPLITS)}")
-    return split
 
 
 @dataclass(frozen=True)
@@ -301,12 +292,10 @@ def _sample_texture(rng: np.random.Generator, pool: _Pool, options: SamplingOpti
 def _sample_distractors(
     task: TaskSpec, rng: np.random.Generator, options: SamplingOptions, scene: Mapping[str, Any], pools: _Pools
 ) -> tuple[SceneObject, ...]:
-    from ..scene.layout import keepout_boxes
-
     shapes, textures = pools.shape, pools.texture
     own_shape = scene.get("object_shape")
     lookalike = set(scene_shape_families(task.name, shapes.family_of(own_shape) if own_shape else None))
-    blocked = [tuple(b) for b in keepout_boxes(task.name)]
+    blocked = [tuple(b) for b in keepout.keepout_boxes(task.name)]
     (xlo, ylo), (xhi, yhi) = DISTRACTOR_AREA
     items = []
     for _ in range(options.n_distractors):

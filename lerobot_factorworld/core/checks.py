@@ -1,5 +1,6 @@
-"""Checks of user settings shared by every config (the ``factorworld`` commands and the LeRobot env
-config), so that each rule and its message live in one place.
+"""Pure checks of user settings shared by every config (the ``factorworld`` commands and the LeRobot env
+config), so that each rule and its message live in one place. Checks that need a fact of a higher layer
+(task names, cameras, factors, asset folders) live next to that fact and use these.
 
 Every check raises ``ValueError`` (``FileNotFoundError`` for a missing input) with one line that names
 the valid choices. Configs call them from ``__post_init__``: a bad value is refused when it is parsed,
@@ -13,6 +14,8 @@ import numbers
 from collections.abc import Iterable, Sequence
 from pathlib import Path
 
+from huggingface_hub.utils import validate_repo_id
+
 MIN_IMAGE_SIZE = 8
 # Within every GL's offscreen framebuffer limit; a 4096 x 4096 frame is already 48 MiB per camera and step.
 MAX_IMAGE_SIZE = 4096
@@ -22,33 +25,6 @@ def split_list(value: str | Sequence[str] | None) -> list[str]:
     """``"a, b"`` or ``["a", "b"]`` -> ``["a", "b"]`` (empty items dropped)."""
     items = (value or "").split(",") if isinstance(value, str) or value is None else list(value)
     return [str(item).strip() for item in items if str(item).strip()]
-
-
-def check_tasks(task: str | Sequence[str] | None) -> list[str]:
-    """Task names (comma-separated) -> canonical names; at least one, each once."""
-    from .tasks import TASKS, get_task
-
-    names = [get_task(name).name for name in split_list(task)]
-    if not names:
-        raise ValueError(f"no task given; valid tasks: {', '.join(TASKS)}")
-    duplicates = sorted({n for n in names if names.count(n) > 1})
-    if duplicates:
-        raise ValueError(f"task(s) {', '.join(duplicates)} given more than once")
-    return names
-
-
-def check_cameras(cameras: str | Sequence[str], setting: str = "cameras") -> tuple[str, ...]:
-    """Camera names (comma-separated) -> tuple; at least one, each once, all known."""
-    from .scene.cameras import CAMERAS, check_camera_names
-
-    names = split_list(cameras)
-    try:
-        return check_camera_names(names)
-    except ValueError:
-        raise ValueError(
-            f"bad {setting} {','.join(names) or '(none)'!s}; valid cameras: {', '.join(CAMERAS)} "
-            "(at least one, each at most once, comma-separated)"
-        ) from None
 
 
 def check_image_size(size: int | Sequence[int], setting: str = "image_size") -> None:
@@ -62,36 +38,10 @@ def check_image_size(size: int | Sequence[int], setting: str = "image_size") -> 
         )
 
 
-def check_quality(quality: str) -> None:
-    from .scene.build import QUALITIES
-
-    check_choice("quality", quality, QUALITIES)
-
-
-def check_split(split: str) -> None:
-    from .factors.registry import SPLITS
-
-    check_choice("split", split, SPLITS)
-
-
 def check_choice(setting: str, value: object, choices: Iterable[object]) -> None:
     choices = tuple(choices)
     if value not in choices:
         raise ValueError(f"unknown {setting} {value!r}; valid: {', '.join(map(str, choices))}")
-
-
-def check_factors(factors: Sequence[str], tasks: Sequence[str], setting: str = "factors") -> None:
-    """Known factor names, each once, that apply to every task (the error says why one does not)."""
-    from .factors.registry import check_factor_names, check_task_support
-    from .tasks import get_task
-
-    factors = list(factors)
-    check_factor_names(factors)
-    duplicates = sorted({f for f in factors if factors.count(f) > 1})
-    if duplicates:
-        raise ValueError(f"{setting}: factor(s) {', '.join(duplicates)} given more than once")
-    for task in tasks:
-        check_task_support(get_task(task), factors)
 
 
 def check_at_least(setting: str, value: int | float | None, minimum: int | float) -> None:
@@ -146,7 +96,6 @@ def check_input_file(path: str | Path, setting: str) -> Path:
 
 def check_repo_id(repo_id: str) -> None:
     """``user/name`` as the Hugging Face Hub accepts it (LeRobot keys datasets by it even offline)."""
-    from huggingface_hub.utils import validate_repo_id
 
     if repo_id.count("/") != 1:
         raise ValueError(f"repo_id must look like 'user/name', got {repo_id!r}")
@@ -154,12 +103,3 @@ def check_repo_id(repo_id: str) -> None:
         validate_repo_id(repo_id)
     except ValueError as err:
         raise ValueError(f"bad repo_id {repo_id!r}: {err}") from None
-
-
-def check_asset_folders(texture_folder: str | None, shape_folder: str | None) -> None:
-    """User asset folders exist and hold at least one usable file (listing only; nothing is loaded)."""
-    from .assets.library import folder_names
-
-    for kind, folder in (("texture", texture_folder), ("shape", shape_folder)):
-        if folder is not None:
-            folder_names(kind, folder)  # raises naming the supported extensions

@@ -16,21 +16,25 @@ from lerobot.configs import FeatureType, PolicyFeature
 from lerobot.envs.configs import EnvConfig
 from lerobot.utils.constants import ACTION, OBS_IMAGES, OBS_STATE
 
-from ..factors.registry import PAPER_STUDY_FACTORS
-from ..factors.sampling import SamplingOptions
-from ..tasks import get_task
-from ..validation import (
-    check_asset_folders,
-    check_at_least,
-    check_cameras,
-    check_factors,
-    check_image_size,
-    check_input_file,
-    check_quality,
-    check_seed,
-    check_tasks,
+from ..assets.library import check_asset_folders
+from ..core.checks import check_at_least, check_image_size, check_input_file, check_seed
+from ..envs.factor_env import CONTROL_FPS, FactorWorldEnv
+from ..factors.registry import PAPER_STUDY_FACTORS, check_factors
+from ..factors.values import load_configs
+from ..protocol.conditions import (
+    PAIR_SEPARATOR,
+    TRAIN_SUITE,
+    check_condition,
+    evaluation_suites,
+    is_family_condition,
+    parse_shift,
 )
-from .factor_env import CONTROL_FPS, FactorWorldEnv
+from ..protocol.coverage import checked_vector_env
+from ..protocol.sampling import SamplingOptions
+from ..protocol.sidecar import check_against_dataset, read_dataset_condition
+from ..scene.build import check_quality
+from ..scene.cameras import check_cameras
+from ..tasks import check_tasks, get_task
 
 logger = logging.getLogger(__name__)
 
@@ -105,10 +109,6 @@ class FactorWorldEnvConfig(EnvConfig):
 
     def _validate(self) -> None:
         """Refuse bad settings when the config is parsed, so ``lerobot-eval`` fails before building a policy."""
-        from ..pick.sampling import CONDITIONS as LANGUAGE_CONDITIONS
-        from ..pick.sampling import check_condition
-        from ..study.conditions import PAIR_SEPARATOR, parse_shift
-
         tasks = check_tasks(self.task)
         check_cameras(self.cameras)
         check_image_size(self.image_size)
@@ -124,7 +124,7 @@ class FactorWorldEnvConfig(EnvConfig):
         check_factors(self.train_factors, tasks, "train_factors")
         conditions = [PAIR_SEPARATOR.join(parse_shift(shift)) for shift in self.shifts]
         for condition in conditions:
-            if condition in LANGUAGE_CONDITIONS:
+            if is_family_condition(condition):  # a task family's own (pick: held-out phrasings / objects)
                 check_condition(condition, tasks)
                 continue
             check_factors(condition.split(PAIR_SEPARATOR), tasks, f"shift {condition!r}")
@@ -136,8 +136,6 @@ class FactorWorldEnvConfig(EnvConfig):
             self._check_configs_file(tasks)
 
     def _check_configs_file(self, tasks: list[str]) -> None:
-        from ..factors.values import load_configs
-
         path = check_input_file(self.configs_path, "configs_path")
         try:
             configs = load_configs(path)
@@ -159,8 +157,6 @@ class FactorWorldEnvConfig(EnvConfig):
             self.train_factors = list(PAPER_STUDY_FACTORS) if self.train_factors is None else self.train_factors
             self.seed = DEFAULT_ENV_SEED if self.seed is None else self.seed
             return
-        from ..study.conditions import check_against_dataset, read_dataset_condition
-
         dataset = read_dataset_condition(self.dataset_root)
         explicit_sampling = None if self.sampling == SamplingOptions() else self.sampling
         check_against_dataset(
@@ -197,9 +193,6 @@ class FactorWorldEnvConfig(EnvConfig):
 
     def suites(self, task: str) -> dict:
         """Evaluation conditions -> scene configurations for ``task``."""
-        from ..factors.values import load_configs
-        from ..study.conditions import TRAIN_SUITE, evaluation_suites, read_dataset_condition
-
         train_configs = None
         if self.dataset_root:
             train_configs = read_dataset_condition(self.dataset_root).train_configs(get_task(task).name)
@@ -232,8 +225,6 @@ class FactorWorldEnvConfig(EnvConfig):
         return suites
 
     def create_envs(self, n_envs: int, use_async_envs: bool = False) -> dict[str, dict[int, gym.vector.VectorEnv]]:
-        from ..study.conditions import checked_vector_env
-
         base_cls = gym.vector.AsyncVectorEnv if (use_async_envs and n_envs > 1) else gym.vector.SyncVectorEnv
         extra = {"context": "forkserver"} if base_cls is gym.vector.AsyncVectorEnv else {}
         vector_cls = checked_vector_env(base_cls)  # logs how the seeded episodes covered the environments

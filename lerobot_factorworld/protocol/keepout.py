@@ -15,9 +15,13 @@ from functools import cache
 import mujoco
 import numpy as np
 
+from ..envs.factor_env import FactorWorldEnv
+from ..experts import expert_action, expert_policy
 from ..factors.registry import DISTRACTOR_SIZE, factor_range, get_factor
+from ..factors.values import FactorValues, SceneConfig
+from ..families import family_of
+from ..scene.build import FLOOR_GEOM, ROBOT_ROOT, TABLE_CENTER, geom_world_corners
 from ..tasks import get_task
-from .build import FLOOR_GEOM, ROBOT_ROOT, TABLE_CENTER
 
 SCENERY_BODIES = ("tablelink", "RetainingWall", "mocap")  # static scenery distractors may touch
 GRIPPER_BODIES = ("hand", "rightclaw", "leftclaw", "rightpad", "leftpad")
@@ -29,21 +33,16 @@ SWEEP_STEPS = 300
 @cache
 def keepout_boxes(task_name: str) -> np.ndarray:
     """(k, 4) boxes [xmin, ymin, xmax, ymax] in the table frame that distractors must not overlap."""
-    from ..envs.factor_env import FactorWorldEnv
-    from ..experts import expert_action, expert_policy
-    from ..factors.values import FactorValues, SceneConfig
-
     task = get_task(task_name)
-    if task.family == "pick":  # objects change per environment: keep the whole pick workspace free
-        from ..pick.layout import workspace_keepout
-
-        return np.array([workspace_keepout(CLEARANCE)], dtype=np.float64)
+    boxes = family_of(task).keepout(task, CLEARANCE)  # a family's own area (pick: its whole workspace)
+    if boxes is not None:
+        return boxes
     widest = list(get_factor("object_pos").ranges)[-1]
     low, high = factor_range(task, "object_pos", widest)
     starts = [(0.0, 0.0), *itertools.product((low[0], high[0]), (low[1], high[1]))]
     env = FactorWorldEnv(task.name, [SceneConfig(task.name, FactorValues(object_pos=s)) for s in starts], cameras=())
     policy = expert_policy(task)
-    boxes: list[np.ndarray] = []
+    swept: list[np.ndarray] = []
     try:
         for index in range(len(starts)):
             env.reset(seed=0, options={"env_index": index})
@@ -55,10 +54,10 @@ def keepout_boxes(task_name: str) -> np.ndarray:
                 if terminated:
                     break
             _record(env.model, env.data, tracked, sweep)
-            boxes.extend(box for box in sweep.values() if np.isfinite(box).all())
+            swept.extend(box for box in sweep.values() if np.isfinite(box).all())
     finally:
         env.close()
-    out = np.asarray(boxes, dtype=np.float64)
+    out = np.asarray(swept, dtype=np.float64)
     out[:, [0, 2]] -= TABLE_CENTER[0]
     out[:, [1, 3]] -= TABLE_CENTER[1]
     out[:, :2] -= CLEARANCE
@@ -85,7 +84,7 @@ def _tracked_geoms(model: mujoco.MjModel) -> dict[int, tuple[list[int], bool]]:
 def _record(model, data, tracked, sweep) -> None:
     low_z = DISTRACTOR_SIZE[1] + LOW_MARGIN
     for key, (geoms, is_gripper) in tracked.items():
-        corners = np.concatenate([_geom_world_corners(model, data, g) for g in geoms])
+        corners = np.concatenate([geom_world_corners(model, data, g) for g in geoms])
         if is_gripper and corners[:, 2].min() > low_z:
             continue
         box = sweep[key]
@@ -101,9 +100,3 @@ def _root_body(model: mujoco.MjModel, b: int) -> int:
     while b and model.body_parentid[b] != 0:
         b = int(model.body_parentid[b])
     return b
-
-
-def _geom_world_corners(model, data, g: int) -> np.ndarray:
-    from .build import _geom_world_corners as corners
-
-    return corners(model, data, g)

@@ -1,7 +1,7 @@
 """One way for every ``factorworld`` command to read its settings: :func:`parse_config`.
 
 draccus parses ``--key=value`` flags (and an optional ``--config_path`` YAML file) into the command's
-dataclass, whose ``__post_init__`` validates every field (see :mod:`lerobot_factorworld.validation`).
+dataclass, whose ``__post_init__`` validates every field (see :mod:`lerobot_factorworld.core.checks`).
 Whatever goes wrong (an unknown key, a value of the wrong type, an unreadable YAML file, an invalid
 value) comes out as one :class:`SettingError` whose message is a single line naming the valid choices;
 ``cli.main`` prints it as ``error: ...`` and exits with status 2 before any work has started, with no
@@ -32,6 +32,11 @@ import typing
 from pathlib import Path
 from typing import Any
 
+import draccus
+from draccus import cfgparsing
+from draccus.argparsing import ArgumentParser
+from draccus.utils import DecodingError, DraccusException, ParsingError
+
 CONFIG_PATH_FLAG = "--config_path"
 HELP_FLAGS = ("-h", "--help")
 LIST_DECODING_ERROR = "is not of a valid input for a list type"  # draccus's message for a non-list value
@@ -46,9 +51,6 @@ def parse_config[T](cls: type[T], args: list[str], command: str = "") -> T:
 
     ``--help`` prints draccus's help and exits 0. Any other failure raises :class:`SettingError`.
     """
-    import draccus
-    from draccus.argparsing import ArgumentParser
-
     prog = f"factorworld {command}".strip()
     if any(arg in HELP_FLAGS for arg in args):
         return draccus.parse(cls, args=args, prog=prog)
@@ -67,8 +69,6 @@ def parse_config[T](cls: type[T], args: list[str], command: str = "") -> T:
 
 def describe(err: BaseException, flags: list[str] | None = None) -> str:
     """The message that matters in a (draccus-wrapped) parsing or validation error."""
-    from draccus.utils import DecodingError, DraccusException, ParsingError
-
     if isinstance(err, DecodingError):
         key = ".".join(err.key_path)
         if err.message.startswith("Failed when parsing") and err.__cause__ is not None:
@@ -135,8 +135,6 @@ def _config_path(args: list[str]) -> str | None:
 
 def _check_config_file(cls: type, path: str, flags: list[str]) -> None:
     """The YAML file exists, parses to a mapping, and names only settings ``cls`` has."""
-    from draccus import cfgparsing
-
     file = Path(path).expanduser()
     if not file.is_file():
         raise SettingError(f"{CONFIG_PATH_FLAG} {path} " + ("is not a file" if file.exists() else "does not exist"))

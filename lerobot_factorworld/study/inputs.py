@@ -1,0 +1,134 @@
+"""The inputs of each kind of step, typed: built by ``plan.py``, read by ``steps.py`` and ``cost.py``.
+
+A step's key hashes ``to_dict()`` of its inputs (``Step.inputs``), so ``to_dict`` gives exactly the
+JSON the key has always hashed: the same names, and optional entries left out when unset (a family's
+sampling options for tasks of other families, ``n_test_envs`` for the ``train`` condition).
+``from_dict`` is the one reader of a stored step's inputs: a missing or unknown entry is an error
+naming it, not a silent default.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass, field, fields
+from typing import Any, ClassVar
+
+from ..protocol.conditions import TRAIN_SUITE
+
+
+def _from_dict(cls, data: Mapping[str, Any], extra: str | None = None):
+    """``cls(**data)``, refusing unknown names (except into ``extra``) and naming missing ones."""
+    names = {f.name for f in fields(cls) if f.name != extra}
+    optional = {f.name for f in fields(cls) if f.name in cls.OPTIONAL}
+    missing = sorted(names - optional - set(data))
+    if missing:
+        raise ValueError(f"{cls.__name__}: missing step input(s) {', '.join(missing)}")
+    known = {k: v for k, v in data.items() if k in names}
+    rest = {k: v for k, v in data.items() if k not in names}
+    if rest and extra is None:
+        raise ValueError(f"{cls.__name__}: unknown step input(s) {', '.join(sorted(rest))}")
+    return cls(**known, **({extra: rest} if extra else {}))
+
+
+@dataclass(frozen=True)
+class CollectInputs:
+    """One dataset of scripted demonstrations (``factorworld collect``)."""
+
+    OPTIONAL: ClassVar[frozenset[str]] = frozenset()
+
+    task: str
+    n_envs: int
+    seed: int
+    train_factors: tuple[str, ...]  # sorted: each factor has its own RNG, the order changes nothing
+    demos: int
+    cameras: str
+    image_size: int
+    use_videos: bool
+    action_noise: float
+    max_episode_steps: int | None
+    n_distractors: int
+    widths: Mapping[str, str]  # object_pos width and the run's radius widths
+    data_version: int
+    versions: Mapping[str, str]
+    family_options: Mapping[str, Any] = field(default_factory=dict)  # the task family's sampling options
+
+    def to_dict(self) -> dict[str, Any]:
+        out = {f.name: getattr(self, f.name) for f in fields(self) if f.name != "family_options"}
+        out.update(train_factors=list(self.train_factors), widths=dict(self.widths), versions=dict(self.versions))
+        out.update(self.family_options)  # at the top level, as keys have always held them
+        return out
+
+    @classmethod
+    def from_dict(cls, data: Mapping[str, Any]) -> CollectInputs:
+        out = _from_dict(cls, data, extra="family_options")
+        return _replace_seq(out, "train_factors")
+
+
+@dataclass(frozen=True)
+class TrainInputs:
+    """One ``lerobot-train`` run of a method on a dataset."""
+
+    OPTIONAL: ClassVar[frozenset[str]] = frozenset()
+
+    policy: Mapping[str, Any]  # path-like settings naming a file replaced by its content hash
+    seed: int
+    steps: int | None  # None when ``epochs`` is set
+    epochs: float | None
+    batch_size: int
+    threads: int
+    device: str
+    extra_args: tuple[str, ...]
+    versions: Mapping[str, str]
+
+    def to_dict(self) -> dict[str, Any]:
+        out = {f.name: getattr(self, f.name) for f in fields(self)}
+        out.update(policy=dict(self.policy), extra_args=list(self.extra_args), versions=dict(self.versions))
+        return out
+
+    @classmethod
+    def from_dict(cls, data: Mapping[str, Any]) -> TrainInputs:
+        return _replace_seq(_from_dict(cls, data), "extra_args")
+
+
+@dataclass(frozen=True)
+class EvalInputs:
+    """One condition of one checkpoint (LeRobot's evaluation)."""
+
+    OPTIONAL: ClassVar[frozenset[str]] = frozenset({"n_test_envs"})
+
+    condition: str
+    episodes: int
+    start_seed: int
+    max_episode_steps: int | None
+    device: str
+    versions: Mapping[str, str]
+    n_test_envs: int | None = None  # None (and not in the key) for ``train``: the dataset's own environments
+
+    def __post_init__(self) -> None:
+        if (self.condition == TRAIN_SUITE) != (self.n_test_envs is None):
+            raise ValueError(f"n_test_envs is set for every shifted condition and only for them ({self.condition})")
+
+    def to_dict(self) -> dict[str, Any]:
+        out = {f.name: getattr(self, f.name) for f in fields(self)}
+        out["versions"] = dict(self.versions)
+        if self.n_test_envs is None:
+            del out["n_test_envs"]
+        return out
+
+    @classmethod
+    def from_dict(cls, data: Mapping[str, Any]) -> EvalInputs:
+        return _from_dict(cls, data)
+
+
+INPUTS = {"collect": CollectInputs, "train": TrainInputs, "eval": EvalInputs}
+
+
+def _replace_seq(inputs, name: str):
+    """A JSON list read back as the tuple the frozen dataclass holds."""
+    object.__setattr__(inputs, name, tuple(getattr(inputs, name)))
+    return inputs
+
+
+def inputs_of(kind: str, data: Mapping[str, Any]) -> CollectInputs | TrainInputs | EvalInputs:
+    """The typed inputs of a step of ``kind`` from its stored (key) dict."""
+    return INPUTS[kind].from_dict(data)

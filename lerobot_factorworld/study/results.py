@@ -1,0 +1,136 @@
+"""``results.csv``: one row per method x task x N x widths x condition x seed, built from the finished
+evaluation steps. Everything else the report shows (tables, plots) is derived from these rows, so a rerun
+or a resumed study rewrites the same file (no duplicated rows)."""
+
+from __future__ import annotations
+
+import csv
+import io
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from ..core.io import atomic_write_text
+from ..protocol.conditions import PAIR_SEPARATOR, TRAIN_SUITE
+from .config import RADIUS_FACTORS, StudyConfig
+from .metrics import paired_gap, wilson_interval
+from .plan import Plan, radius_of
+from .steps import Step, is_done, read_result
+
+RESULTS_FILE = "results.csv"
+RESULT_COLUMNS = (
+    "study",  # study name
+    "method",  # method name from the config
+    "policy",  # LeRobot policy type
+    "task",
+    "n_train_envs",  # N
+    "seed",  # environment-sampling and training seed
+    "widths",  # sampling widths of the run: "default" or e.g. "camera_pos=medium" (radius sweep)
+    "condition",  # "train", a factor, or a pair "a+b"
+    "n_factors",  # shifted factors: 0 (train), 1, 2
+    "radius_m",  # radius of camera_pos / table_pos in this run (single-factor rows of those factors)
+    "n_envs",  # environments of the condition (N for train, n_test_envs otherwise)
+    "episodes",
+    "successes",
+    "success_rate",
+    "ci_low",  # Wilson 95% interval of success_rate
+    "ci_high",
+    "train_success_rate",  # P_T of the same checkpoint on the same episode seeds
+    "gap",  # P_T - P_F (0 for train)
+    "gap_ci_low",  # Newcombe paired 95% interval of gap
+    "gap_ci_high",
+    "envs_visited",  # environments the episodes visited (all, equally, unless flagged in report.md)
+    "fingerprint",  # hash of the condition's environments (configurations and object-start width)
+    "step",  # key of the eval step (steps/eval/<key>/)
+)
+
+
+@dataclass(frozen=True)
+class Evaluation:
+    """A finished evaluation step and its result (episode outcomes, seeds, and any family records)."""
+
+    step: Step
+    result: dict[str, Any]
+
+    @property
+    def labels(self) -> dict[str, Any]:
+        """method, task, n_train_envs, seed, widths and condition of the evaluation."""
+        return self.step.meta
+
+
+def finished_evaluations(plan: Plan, study_dir: str | Path) -> list[Evaluation]:
+    """Every finished evaluation of ``plan``, in plan order."""
+    return [Evaluation(s, read_result(s, study_dir)) for s in plan.of_kind("eval") if is_done(s, study_dir)]
+
+
+def result_rows(cfg: StudyConfig, evaluations: Sequence[Evaluation]) -> list[dict]:
+    """``results.csv`` rows of ``evaluations`` (in their order)."""
+    policies = {m.name: m.policy["type"] for m in cfg.methods}
+    train_outcomes = {e.step.deps[0]: e.result for e in evaluations if e.labels["condition"] == TRAIN_SUITE}
+    return [_row(cfg.name, policies, e, train_outcomes.get(e.step.deps[0])) for e in evaluations]
+
+
+def _row(study: str, policies: dict[str, str], evaluation: Evaluation, train: dict | None) -> dict:
+    res, meta = evaluation.result, evaluation.labels
+    k, n = sum(res["successes"]), len(res["successes"])
+    low, high = wilson_interval(k, n)
+    gap = gap_low = gap_high = p_train = math.nan
+    condition = meta["condition"]
+    if train is not None and train["seeds"] == res["seeds"]:
+        p_train = sum(train["successes"]) / len(train["successes"])
+        if condition == TRAIN_SUITE:
+            gap = 0.0  # by construction: no interval
+        else:
+            gap, gap_low, gap_high = paired_gap(train["successes"], res["successes"])
+    factors = [] if condition == TRAIN_SUITE else condition.split(PAIR_SEPARATOR)
+    radius = radius_of(meta["widths"], factors[0]) if len(factors) == 1 and factors[0] in RADIUS_FACTORS else None
+    return {
+        "study": study,
+        "method": meta["method"],
+        "policy": policies.get(meta["method"], ""),
+        "task": meta["task"],
+        "n_train_envs": meta["n_train_envs"],
+        "seed": meta["seed"],
+        "widths": meta["widths"],
+        "condition": condition,
+        "n_factors": len(factors),
+        "radius_m": radius,
+        "n_envs": res["n_envs"],
+        "episodes": n,
+        "successes": k,
+        "success_rate": k / n if n else math.nan,
+        "ci_low": low,
+        "ci_high": high,
+        "train_success_rate": p_train,
+        "gap": gap,
+        "gap_ci_low": gap_low,
+        "gap_ci_high": gap_high,
+        "envs_visited": res["envs_visited"],
+        "fingerprint": res["fingerprint"],
+        "step": evaluation.step.key,
+    }
+
+
+def csv_text(rows: Sequence[dict], columns: Sequence[str]) -> str:
+    """``rows`` as CSV text with a header (``\\n`` line ends; floats to 6 decimals, NaN and None empty)."""
+    out = io.StringIO()
+    writer = csv.DictWriter(out, fieldnames=list(columns), lineterminator="\n")
+    writer.writeheader()
+    for row in rows:
+        writer.writerow({k: _fmt(row[k]) for k in columns})
+    return out.getvalue()
+
+
+def write_results(rows: Sequence[dict], path: Path) -> Path:
+    """Write ``results.csv`` atomically."""
+    return atomic_write_text(path, csv_text(rows, RESULT_COLUMNS))
+
+
+def _fmt(value) -> str:
+    if value is None or (isinstance(value, float) and math.isnan(value)):
+        return ""
+    if isinstance(value, float):
+        return f"{value:.6f}"
+    return str(value)
