@@ -25,6 +25,7 @@ class TaskSpec:
         object_is_free: Whether the object is a loose rigid body (free joint). Only loose objects can
             be resized or reshaped without changing the task's mechanics.
         max_episode_steps: Horizon used for evaluation and collection (Meta-World's own cap is 500).
+        demo_steps: Typical length of a scripted demo (measured; the study's dry-run cost model uses it).
         nominal_object_xy: The object's nominal start (x, y) when it is not the centre of Meta-World's
             random reset range: pick-place and basketball need the object at least 0.15 m from the goal.
         reshapeable: Whether the object-shape factor applies: the task's scripted expert still solves
@@ -56,6 +57,7 @@ class TaskSpec:
     object_bodies: tuple[str, ...]
     object_is_free: bool = False
     max_episode_steps: int = 500
+    demo_steps: int = 100
     nominal_object_xy: tuple[float, float] | None = None
     reshapeable: bool = False
     limits: tuple[tuple[str, tuple[tuple[float, ...], tuple[float, ...]]], ...] = ()
@@ -93,6 +95,7 @@ _ROWS = (
         # air at y 0.8..0.9 with a 7 cm radius.
         goal=(-0.005, 0.40, 0.02),
         success_radius=0.03,
+        demo_steps=50,
     ),
     TaskSpec(
         "basketball",
@@ -109,6 +112,7 @@ _ROWS = (
         ("obj",),
         True,
         limits=(("object_pos", ((-0.05, -0.04), (0.05, 0.04))), ("object_size", ((0.8,), (1.3,)))),
+        demo_steps=120,
         object_family="box",  # a cube
     ),
     TaskSpec("button-press", "press the button from the front", ("box",)),
@@ -121,7 +125,9 @@ _ROWS = (
         limits=(("object_pos", ((-0.05, -0.025), (0.05, 0.075))),),
     ),
     TaskSpec("door-lock", "lock the door by turning the lock", ("door",)),
-    TaskSpec("door-open", "open the door", ("door",), limits=(("object_pos", ((-0.05, -0.03), (0.1, 0.075))),)),
+    TaskSpec(
+        "door-open", "open the door", ("door",), limits=(("object_pos", ((-0.05, -0.03), (0.1, 0.075))),), demo_steps=85
+    ),
     TaskSpec("door-unlock", "unlock the door by turning the lock", ("door",)),
     TaskSpec(
         "drawer-close", "push the drawer closed", ("drawer",), limits=(("object_pos", ((-0.1, -0.075), (0.1, 0.02))),)
@@ -129,7 +135,7 @@ _ROWS = (
     TaskSpec("drawer-open", "pull the drawer open", ("drawer",)),
     TaskSpec("faucet-close", "turn the faucet handle to close it", ("faucetBase",)),
     TaskSpec("faucet-open", "turn the faucet handle to open it", ("faucetBase",)),
-    TaskSpec("handle-press", "press the handle down", ("box",)),
+    TaskSpec("handle-press", "press the handle down", ("box",), demo_steps=30),
     TaskSpec("handle-pull", "pull the handle up", ("box",)),
     TaskSpec("handle-pull-side", "pull the side handle up", ("box",)),
     TaskSpec("lever-pull", "pull the lever", ("lever",), limits=(("object_pos", ((-0.1, -0.06), (0.1, 0.075))),)),
@@ -144,6 +150,7 @@ _ROWS = (
         True,
         # The scripted expert needs about 80 steps (docs/pick.md's expert table: 80-86 on average).
         max_episode_steps=200,
+        demo_steps=85,
         family="pick",
         family_entry_point="lerobot_factorworld.pick.family:PICK_FAMILY",
         metaworld_base="pick-place",

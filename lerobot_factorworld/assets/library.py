@@ -450,8 +450,8 @@ class AssetSplitsError(RuntimeError):
 REGENERATE = "regenerate it with `python scripts/make_asset_splits.py`"
 
 
-@functools.lru_cache(maxsize=1)
 def _document() -> dict[str, Any]:
+    """The parsed splits file (read each time: the split lists themselves are cached by :func:`_builtin_splits`)."""
     try:
         doc = json.loads(SPLITS_FILE.read_text(encoding="utf-8"))
     except (OSError, ValueError) as exc:

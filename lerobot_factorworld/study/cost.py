@@ -39,8 +39,8 @@ PROFILES = {
 
 
 def expert_episode_steps(task: str) -> int:
-    """Typical scripted-demo length (measured: pick-place ~50, door-open ~85, pick ~85, bin-picking ~120 steps)."""
-    return {"pick-place": 50, "door-open": 85, "pick": 85, "bin-picking": 120, "handle-press": 30}.get(task, 100)
+    """Typical scripted-demo length of ``task`` (its row's ``demo_steps``, measured)."""
+    return get_task(task).demo_steps
 
 
 def cameras_of(collect: CollectInputs) -> int:
