@@ -80,12 +80,12 @@ def test_pick_place_expert_leaves_the_puck_on_the_table_goal(make_env):
 
 def test_experts_are_measured_as_the_collector_runs_them(make_env):
     """The rates above are those of ``factorworld collect``: the same actions for the same episode seed."""
-    from lerobot_factorworld.datasets.collect import _frames, episode_seed
+    from lerobot_factorworld.datasets.collect import episode_frames, episode_seed
 
     env = make_env("pick-place", cameras=("front",), image_size=8, max_episode_steps=15)
     policy = expert_policy("pick-place")
     seed = episode_seed(0, 0, 0, 0, 0)
-    frames = _frames(rollout(env, policy, seed, NOISE), env.task_description)
+    frames = episode_frames(rollout(env, policy, seed, NOISE), env.task_description)
     actions = []
 
     def recording(*args):

@@ -38,6 +38,7 @@ from ..core.checks import (
 )
 from ..core.io import atomic_write_text
 from ..core.splits import check_split
+from ..core.timing import Timings
 from ..envs import runtime
 from ..envs.factor_env import CONTROL_FPS, FactorWorldEnv
 from ..experts import Episode, expert_policy, rollout
@@ -183,6 +184,7 @@ class CollectReport:
     frames: int
     failures: dict[str, int]
     seconds: float
+    timings: dict[str, float] = field(default_factory=dict)  # where the time went (seconds; jobs' summed)
 
 
 def plan_jobs(cfg: CollectConfig) -> list[Job]:
@@ -221,6 +223,7 @@ def staging_dir(root: Path) -> Path:
 def collect(cfg: CollectConfig) -> CollectReport:
     """Run (or resume) a collection and merge it into ``cfg.root``."""
     start = time.perf_counter()
+    timings = Timings()
     _quiet_encoder()
     root = Path(cfg.root).resolve()
     parts = staging_dir(root)
@@ -248,7 +251,9 @@ def collect(cfg: CollectConfig) -> CollectReport:
                         break
                     bar.update(len(job.demo_indices))
             else:
+                pool_start = time.perf_counter()
                 context = _worker_context(cfg.start_method)
+                timings.add("worker_start", time.perf_counter() - pool_start)
                 with ProcessPoolExecutor(workers, mp_context=context, initializer=_worker_init) as pool:
                     futures = {pool.submit(run_job, job, settings, str(parts)): job for job in todo}
                     for future in as_completed(futures):
@@ -264,11 +269,15 @@ def collect(cfg: CollectConfig) -> CollectReport:
             f"re-run the same command to resume): {errors}"
         )
     results = [json.loads((parts / job.job_id / JOB_RESULT_FILE).read_text()) for job in jobs]
+    for job, result in zip(jobs, results, strict=True):
+        if job.job_id not in done:  # jobs run now (resumed ones were timed by the run that did them)
+            timings.update(result.get("timings", {}))
     failures = {f"{r['task']}/{r['env_id']}": r["failures"] for r in results if r["failures"]}
-    episodes, frames = _merge(cfg, root, parts, jobs, results)
+    with timings.span("merge"):
+        episodes, frames = _merge(cfg, root, parts, jobs, results)
     if cfg.push_to_hub:
         push_dataset(root, cfg.repo_id, private=cfg.private)
-    return CollectReport(root, episodes, frames, failures, time.perf_counter() - start)
+    return CollectReport(root, episodes, frames, failures, time.perf_counter() - start, timings.as_dict())
 
 
 WORKER_PRELOAD = "lerobot_factorworld.datasets.worker_preload"
@@ -378,6 +387,8 @@ def run_job(job: Job, settings: dict, parts_dir: str) -> dict:
     """Collect one job's demos into ``<parts>/<job_id>`` (atomically). Runs in a worker process."""
     from lerobot.datasets.lerobot_dataset import LeRobotDataset  # noqa: PLC0415  heavy (seconds): only a collecting worker needs it
 
+    timings = Timings()
+    job_start = time.perf_counter()
     worker = {"push_to_hub": False, "private": False}  # the main process pushes (and checked the token)
     cfg = CollectConfig(**{**settings, **worker, "sampling": SamplingOptions(**settings["sampling"])})
     parts = Path(parts_dir)
@@ -416,31 +427,50 @@ def run_job(job: Job, settings: dict, parts_dir: str) -> dict:
 
     dataset.meta.save_episode = save_with_factors
     episodes, failures = [], 0
+    timings.add("setup", time.perf_counter() - job_start)
     try:
-        for demo in job.demo_indices:
-            for attempt in range(cfg.max_attempts):
-                seed = episode_seed(cfg.seed, job.task_index, job.env_index, demo, attempt)
-                episode = rollout(env, policy, seed, cfg.action_noise)
-                if episode.success:
-                    break
-                failures += 1
-            else:
-                continue
-            for frame in _frames(episode, env.task_description):
-                dataset.add_frame(frame)
-            episode_columns.clear()
-            episode_columns.update(
-                {ENV_ID_COLUMN: config.env_id, SPLIT_COLUMN: config.split, **encode_factors(episode.info["factors"])}
-            )
-            # the episode's instruction (and a family's record of what it asked for)
-            episode_columns.update(encode_episode(episode.info, env.task_description, env.task))
-            episode_columns["factorworld/seed"] = seed
-            episode_columns["factorworld/demo"] = demo
-            dataset.save_episode()
-            episodes.append({"demo": demo, "seed": seed, "length": len(episode)})
+        # timed, unchanged: the scene's compilation and rendering inside the expert's rollouts
+        with (
+            timings.wrap(runtime.CompiledScene, "__init__", "env_build"),
+            timings.wrap(runtime.CompiledScene, "render_all", "render"),
+        ):
+            for demo in job.demo_indices:
+                for attempt in range(cfg.max_attempts):
+                    seed = episode_seed(cfg.seed, job.task_index, job.env_index, demo, attempt)
+                    with timings.span("rollout"):
+                        episode = rollout(env, policy, seed, cfg.action_noise)
+                    if episode.success:
+                        break
+                    failures += 1
+                else:
+                    continue
+                with timings.span("write_frames"):
+                    for frame in episode_frames(episode, env.task_description):
+                        dataset.add_frame(frame)
+                episode_columns.clear()
+                episode_columns.update(
+                    {
+                        ENV_ID_COLUMN: config.env_id,
+                        SPLIT_COLUMN: config.split,
+                        **encode_factors(episode.info["factors"]),
+                    }
+                )
+                # the episode's instruction (and a family's record of what it asked for)
+                episode_columns.update(encode_episode(episode.info, env.task_description, env.task))
+                episode_columns["factorworld/seed"] = seed
+                episode_columns["factorworld/demo"] = demo
+                with timings.span("save_episode"):  # image / video encoding and the episode's parquet
+                    dataset.save_episode()
+                episodes.append({"demo": demo, "seed": seed, "length": len(episode)})
     finally:
-        dataset.finalize()
+        with timings.span("finalize"):
+            dataset.finalize()
         env.close()
+    seconds = timings.seconds
+    # the rollouts' time less what was timed inside them: the expert's actions and the physics
+    inner = seconds.get("render", 0.0) + seconds.get("env_build", 0.0)
+    timings.add("expert_physics", seconds.get("rollout", 0.0) - inner)
+    timings.seconds.pop("rollout", None)
     result = {
         "job_id": job.job_id,
         "task": job.task,
@@ -448,6 +478,7 @@ def run_job(job: Job, settings: dict, parts_dir: str) -> dict:
         "episodes": episodes,
         "failures": failures,
         "config": job.config,
+        "timings": timings.as_dict(),
     }
     atomic_write_text(tmp / JOB_RESULT_FILE, json.dumps(result, indent=1))
     if final.exists():
@@ -456,7 +487,7 @@ def run_job(job: Job, settings: dict, parts_dir: str) -> dict:
     return result
 
 
-def _frames(episode: Episode, task_description: str) -> list[dict]:
+def episode_frames(episode: Episode, task_description: str) -> list[dict]:
     """LeRobot frames of an expert episode: each observation with the action taken from it."""
     frames = []
     for obs, action in zip(episode.observations, episode.actions, strict=True):
