@@ -36,7 +36,7 @@ class ContactSheetConfig:
         n_values: Values shown per factor.
         image_size: Side of each rendered image in pixels.
         camera: Camera to render (``factorworld cameras`` lists them).
-        quality: ``fast`` or ``full`` rendering.
+        quality: ``fast``, ``full`` or ``lod`` rendering (``scene.build.QUALITIES``).
         seed: Seed for the factor values.
         split: Asset split to draw discrete values from.
         out: Output PNG path.

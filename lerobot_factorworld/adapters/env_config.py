@@ -54,7 +54,8 @@ class FactorWorldEnvConfig(EnvConfig):
         cameras: Comma-separated camera names (see ``factorworld cameras``); each gives
             ``observation.images.<camera>``.
         image_size: Square image side in pixels.
-        quality: ``fast`` (CPU-friendly, default) or ``full`` (Meta-World's shadows and multisampling).
+        quality: ``fast`` (CPU-friendly, default), ``full`` (Meta-World's shadows and multisampling) or ``lod``
+            (``fast`` with simplified robot meshes: ~2x faster frames, slightly different pixels).
         episode_length: Step limit; ``None`` uses each task's horizon.
         n_train_envs: Number of training environments N (default 5, or the dataset's).
         train_factors: Factors varied across the training environments (default: the paper's seven, or
