@@ -3,16 +3,38 @@ both the table and the figure that show it (so the two always agree on which row
 
 Every selector averages over tasks (and any column not grouped by) per seed, then gives the mean,
 standard error and number of seeds per group (:func:`summary`).
+
+The interval selectors at the end give the report's 95% intervals: each puts the rows it needs into
+(seed x cell) arrays (:class:`Cells`) and runs the seed-level bootstrap of ``metrics.seed_bootstrap``
+on the same computation as the point estimate (resampling training seeds, then episodes within each
+cell; ``BOOTSTRAP_RESAMPLES`` resamples from the fixed ``BOOTSTRAP_SEED``).
 """
 
 from __future__ import annotations
 
 import math
 from collections import defaultdict
-from collections.abc import Iterable, Sequence
+from collections.abc import Callable, Iterable, Mapping, Sequence
+from dataclasses import dataclass
 
-from ..protocol.conditions import PAIR_SEPARATOR
-from .metrics import interaction, mean_se, pair_metric
+import numpy as np
+
+from ..protocol.conditions import PAIR_SEPARATOR, TRAIN_SUITE
+from .metrics import (
+    count_within,
+    group_mean,
+    interaction,
+    mean_se,
+    ols_slope,
+    pair_metric,
+    pair_metric_array,
+    percentile_interval,
+    pooled_rates,
+    rank_hardest_first,
+    seed_bootstrap,
+    spearman,
+    wilson_interval,
+)
 from .plan import DEFAULT_WIDTHS
 
 Stats = dict[tuple, tuple[float, float, int]]  # group -> (mean over seeds, SE over seeds, number of seeds)
@@ -102,3 +124,251 @@ def factor_ordering(rows: Sequence[dict], method: str, factors: Sequence[str]) -
     """Mean gap (over N, tasks; mean and SE over seeds) per single factor of the main grid, for ``method``."""
     stats = gap_per_factor(rows, factors)
     return {f: stats[(method, f)][:2] for f in factors if (method, f) in stats}
+
+
+# --- intervals: the seed-level bootstrap (metrics.seed_bootstrap) on (seed x cell) arrays -----------
+
+Interval = tuple[float, float, float]  # (point estimate, 95% interval low, high)
+CELL_KEYS = ("method", "task", "n_train_envs", "widths", "condition")
+
+
+@dataclass(frozen=True)
+class Cells:
+    """Rows as arrays: ``rates[s, c]`` / ``episodes[s, c]`` of cell ``keys[c]`` (``CELL_KEYS``) for seed
+    ``seeds[s]``; NaN rate: no such row; 0 episodes: count unknown (the rate is then not resampled)."""
+
+    seeds: tuple
+    keys: tuple[tuple, ...]
+    rates: np.ndarray
+    episodes: np.ndarray
+
+    @property
+    def column(self) -> dict[tuple, int]:
+        return {k: i for i, k in enumerate(self.keys)}
+
+    def train_columns(self) -> np.ndarray:
+        """Per column, the column of its ``train`` cell (same method, task, N, widths); -1 if none or train."""
+        col = self.column
+        return np.array(
+            [-1 if k[4] == TRAIN_SUITE else col.get((*k[:4], TRAIN_SUITE), -1) for k in self.keys], dtype=int
+        )
+
+    def bootstrap(self, statistic: Callable[[np.ndarray, np.ndarray], np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
+        return seed_bootstrap(self.rates, self.episodes, statistic)
+
+
+def cells(rows: Iterable[dict], gaps: bool = False) -> Cells:
+    """``rows`` as :class:`Cells`. With ``gaps``, a shifted row whose gap is undefined (no train row on the
+    same episode seeds) is left out, as the gap summaries leave it out."""
+    rows = [r for r in rows if not (gaps and r["condition"] != TRAIN_SUITE and _undefined(r.get("gap", math.nan)))]
+    seeds = tuple(sorted({r["seed"] for r in rows}))
+    keys = tuple(dict.fromkeys(tuple(r.get(k) for k in CELL_KEYS) for r in rows))
+    col, row_of = {k: i for i, k in enumerate(keys)}, {s: i for i, s in enumerate(seeds)}
+    rates = np.full((len(seeds), len(keys)), np.nan)
+    episodes = np.zeros((len(seeds), len(keys)))
+    for r in rows:
+        s, c = row_of[r["seed"]], col[tuple(r.get(k) for k in CELL_KEYS)]
+        rate = r.get("success_rate")
+        if rate is None and r.get("episodes"):
+            rate = r["successes"] / r["episodes"]  # rows that carry counts only
+        rates[s, c] = math.nan if _undefined(rate) else float(rate)
+        episodes[s, c] = r.get("episodes") or 0
+    return Cells(seeds, keys, rates, episodes)
+
+
+def _undefined(value) -> bool:
+    return value is None or (isinstance(value, float) and math.isnan(value))
+
+
+def cell_gaps(rates: np.ndarray, train_columns: np.ndarray) -> np.ndarray:
+    """(..., S, C) rates -> gaps P_T - P_F per cell (NaN for train cells and cells without a train cell)."""
+    has_train = train_columns >= 0
+    return np.where(has_train, rates[..., np.where(has_train, train_columns, 0)] - rates, np.nan)
+
+
+def _interval(point: np.ndarray, replicates: np.ndarray) -> list[Interval]:
+    lo, hi = percentile_interval(replicates)
+    return [
+        (float(p), float(a), float(b)) for p, a, b in zip(np.atleast_1d(point), np.atleast_1d(lo), np.atleast_1d(hi))
+    ]
+
+
+def factor_gap_replicates(
+    rows: Sequence[dict], method: str, factors: Sequence[str]
+) -> tuple[list[str], np.ndarray, np.ndarray]:
+    """The factor ordering's mean gaps (:func:`factor_ordering`) of ``method``: (factors with data, point
+    (F,), bootstrap replicates (B, F))."""
+    grid = [r for r in main_grid(rows) if r["method"] == method and r["condition"] in (TRAIN_SUITE, *factors)]
+    table = cells(grid, gaps=True)
+    present = {k[4] for k in table.keys}
+    names = [f for f in factors if f in present]
+    if not names:
+        return [], np.zeros(0), np.zeros((0, 0))
+    groups = [[i for i, k in enumerate(table.keys) if k[4] == f] for f in names]
+    train = table.train_columns()
+    point, reps = table.bootstrap(lambda r, n: group_mean(cell_gaps(r, train), groups))
+    return names, point, reps
+
+
+def factor_gap_intervals(rows: Sequence[dict], method: str, factors: Sequence[str]) -> dict[str, Interval]:
+    """Per factor: mean gap of ``method`` (over tasks, N, seeds) with its 95% seed-bootstrap interval."""
+    names, point, reps = factor_gap_replicates(rows, method, factors)
+    return dict(zip(names, _interval(point, reps))) if names else {}
+
+
+def ordering_rho_interval(
+    rows: Sequence[dict], method: str, factors: Sequence[str], reference: Mapping[str, float]
+) -> tuple[float, float]:
+    """95% seed-bootstrap interval of Spearman's rho between ``method``'s factor ordering and ``reference``
+    (each replicate re-ranks the factors by its own mean gaps); NaN if rho is mostly undefined."""
+    names, _, reps = factor_gap_replicates(rows, method, factors)
+    if not names:
+        return math.nan, math.nan
+    rhos = np.array([spearman(rank_hardest_first(dict(zip(names, rep.tolist()))), reference) for rep in reps])
+    lo, hi = percentile_interval(rhos)
+    return float(lo), float(hi)
+
+
+@dataclass(frozen=True)
+class PairSummary:
+    """The pair metric of one method, both ways, with 95% seed-bootstrap intervals.
+
+    ``per_cell[pair]``: the metric of every task x N x seed cell, averaged over tasks and N per seed, then
+    over seeds (cells whose harder factor never succeeded left out; the paper's figure's way).
+    ``pooled[pair]``: the metric of success rates pooled over seeds per task x N, averaged over tasks and N.
+    ``within_*``: how many pairs' metric lies within ±``tolerance`` (point, low, high) of ``pairs`` defined.
+    """
+
+    per_cell: dict[str, Interval]
+    pooled: dict[str, Interval]
+    pooled_undefined: dict[str, tuple[int, int]]  # pair -> (task x N cells without a pooled metric, cells)
+    within_per_cell: Interval
+    within_pooled: Interval
+    pairs_per_cell: int
+    pairs_pooled: int
+
+
+def pair_summary(rows: Sequence[dict], method: str, tolerance: float) -> PairSummary | None:
+    """The pair metric of ``method``'s pairs (main grid), per cell and pooled per (task, N), with intervals."""
+    grid = [r for r in main_grid(rows) if r["method"] == method]
+    table = cells(grid)
+    col = table.column
+    triples: dict[str, list[tuple[int, int, int]]] = defaultdict(list)
+    for key in table.keys:
+        if PAIR_SEPARATOR not in key[4]:
+            continue
+        a, b = key[4].split(PAIR_SEPARATOR)
+        ca, cb = col.get((*key[:4], a)), col.get((*key[:4], b))
+        if ca is not None and cb is not None:
+            triples[key[4]].append((col[key], ca, cb))
+    if not triples:
+        return None
+    pairs = list(triples)
+    flat = [t for p in pairs for t in triples[p]]
+    ab, a, b = (np.array([t[i] for t in flat], dtype=int) for i in range(3))
+    groups, start = [], 0
+    for p in pairs:
+        groups.append(list(range(start, start + len(triples[p]))))
+        start += len(triples[p])
+
+    def statistic(r: np.ndarray, n: np.ndarray) -> np.ndarray:
+        per_cell = group_mean(pair_metric_array(r[..., ab], r[..., a], r[..., b]), groups)  # (B, P)
+        pooled_r = pooled_rates(r, n)  # (B, C)
+        pooled_cells = pair_metric_array(pooled_r[..., ab], pooled_r[..., a], pooled_r[..., b])  # (B, J)
+        pooled = group_mean(pooled_cells[..., None, :], groups)  # one "seed": the pooled rates
+        counts = np.stack([count_within(per_cell, tolerance), count_within(pooled, tolerance)], axis=-1)
+        return np.concatenate([per_cell, pooled, counts], axis=-1)
+
+    point, reps = table.bootstrap(statistic)
+    intervals = _interval(point, reps)
+    k = len(pairs)
+    pooled_point = pooled_rates(table.rates, table.episodes)
+    undefined_cells = np.isnan(pair_metric_array(pooled_point[ab], pooled_point[a], pooled_point[b]))
+    return PairSummary(
+        per_cell=dict(zip(pairs, intervals[:k])),
+        pooled=dict(zip(pairs, intervals[k : 2 * k])),
+        pooled_undefined={p: (int(undefined_cells[g].sum()), len(g)) for p, g in zip(pairs, groups)},
+        within_per_cell=intervals[2 * k],
+        within_pooled=intervals[2 * k + 1],
+        pairs_per_cell=int(np.isfinite(point[:k]).sum()),
+        pairs_pooled=int(np.isfinite(point[k : 2 * k]).sum()),
+    )
+
+
+RADIUS_STEP_M = 0.025  # the appendix's radii are multiples of it: slopes are reported per step
+
+
+def radius_slopes(rows: Sequence[dict], radius_factors: Sequence[str]) -> dict[tuple[str, str], Interval]:
+    """Per (method, factor) of the radius sweep: least-squares slope of the mean gap (over tasks, N and
+    seeds, as the radius table) on the radius, in gap per metre, with its 95% seed-bootstrap interval."""
+    swept = radius_rows(rows, radius_factors)
+    if not swept:
+        return {}
+    runs = {(r["method"], r["task"], r["n_train_envs"], r["widths"]) for r in swept}
+    trains = [
+        r
+        for r in rows
+        if r["condition"] == TRAIN_SUITE and (r["method"], r["task"], r["n_train_envs"], r["widths"]) in runs
+    ]
+    table = cells([*swept, *trains], gaps=True)
+    radius = {tuple(r.get(k) for k in CELL_KEYS): r["radius_m"] for r in swept}
+    lines = sorted({(k[0], k[4]) for k in table.keys if k in radius})
+    radii = sorted({v for v in radius.values()})
+    groups = [
+        [i for i, k in enumerate(table.keys) if (k[0], k[4]) == line and radius.get(k) == rad]
+        for line in lines
+        for rad in radii
+    ]
+    train = table.train_columns()
+    shape = (len(lines), len(radii))
+
+    def statistic(r: np.ndarray, n: np.ndarray) -> np.ndarray:
+        means = group_mean(cell_gaps(r, train), groups)  # a radius without cells: NaN, the slope uses the others
+        return ols_slope(radii, means.reshape(*means.shape[:-1], *shape))
+
+    point, reps = table.bootstrap(statistic)
+    return dict(zip(lines, _interval(point, reps)))
+
+
+def pooled_success(rows: Sequence[dict], keys: Sequence[str]) -> dict[tuple, tuple[int, int, float, float]]:
+    """Per group of ``keys``: (successes, episodes, low, high) pooled over seeds and every other column.
+
+    The interval accounts for the pooling over training seeds: the 95% seed-bootstrap interval of the
+    pooled rate, widened where needed to contain the Wilson interval of the pooled episodes (a percentile
+    bootstrap collapses to a point when every episode of every seed succeeds, and with few seeds it
+    understates the spread). With one seed there is no pooling: it is the Wilson interval."""
+    rows = [r for r in rows if r.get("episodes")]
+    if not rows:
+        return {}
+    if any(g not in CELL_KEYS for g in keys):
+        raise ValueError(f"pooled_success groups by columns of {CELL_KEYS}, got {keys}")
+    table = cells(rows)
+    group_of = {k: tuple(dict(zip(CELL_KEYS, k))[g] for g in keys) for k in table.keys}
+    names = list(dict.fromkeys(group_of.values()))
+    number = {name: i for i, name in enumerate(names)}
+    order = np.argsort([number[group_of[k]] for k in table.keys], kind="stable")  # columns, group by group
+    starts = np.searchsorted(np.sort([number[group_of[k]] for k in table.keys]), np.arange(len(names)))
+
+    def statistic(r: np.ndarray, n: np.ndarray) -> np.ndarray:
+        n = np.where(np.isnan(r), 0.0, n)
+        k = np.where(np.isnan(r), 0.0, r * n).sum(axis=-2)[..., order]  # (B, C): pooled over seeds
+        total_n = np.add.reduceat(n.sum(axis=-2)[..., order], starts, axis=-1)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            return np.add.reduceat(k, starts, axis=-1) / total_n
+
+    point, reps = table.bootstrap(statistic)
+    lo, hi = percentile_interval(reps)
+    totals: dict[tuple, list[int]] = defaultdict(lambda: [0, 0])
+    for r in rows:
+        g = group_of[tuple(r.get(k) for k in CELL_KEYS)]
+        totals[g][0] += int(r["successes"])
+        totals[g][1] += int(r["episodes"])
+    out = {}
+    for name, low, high in zip(names, lo, hi):
+        k, n = totals[name]
+        w_lo, w_hi = wilson_interval(k, n)
+        if len(table.seeds) == 1:
+            out[name] = (k, n, w_lo, w_hi)
+        else:
+            out[name] = (k, n, float(np.fmin(low, w_lo)), float(np.fmax(high, w_hi)))
+    return out

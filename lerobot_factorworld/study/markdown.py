@@ -11,16 +11,23 @@ from pathlib import Path
 
 from ..protocol.conditions import TRAIN_SUITE
 from .aggregate import (
+    RADIUS_STEP_M,
+    factor_gap_intervals,
     factor_ordering,
     gap_per_factor_and_n,
     gap_per_radius,
+    main_grid,
+    ordering_rho_interval,
     pair_rows,
+    pair_summary,
+    pooled_success,
     radius_rows,
+    radius_slopes,
     success_per_condition_and_n,
     summary,
 )
 from .config import StudyConfig
-from .metrics import rank_hardest_first, rerank, spearman
+from .metrics import BOOTSTRAP_RESAMPLES, BOOTSTRAP_SEED, rank_hardest_first, rerank, spearman
 from .paper import (
     PAPER_FACTOR_RANKS,
     PAPER_FACTOR_RANKS_STATED,
@@ -43,6 +50,26 @@ def pm(mean: float, se: float) -> str:
     if math.isnan(mean):
         return "n/a"
     return f"{mean:+.3f}" + ("" if math.isnan(se) else f" ± {se:.3f}")
+
+
+def ci(low: float, high: float, digits: int = 3, sign: bool = True) -> str:
+    """``[-0.012, +0.345]`` (``[n/a]`` without an interval)."""
+    if math.isnan(low) or math.isnan(high):
+        return "[n/a]"
+    fmt = f"{{:{'+' if sign else ''}.{digits}f}}"
+    return f"[{fmt.format(low)}, {fmt.format(high)}]"
+
+
+BOOTSTRAP_NOTE = (
+    f"95% intervals marked *bootstrap* are seed-level bootstraps ({BOOTSTRAP_RESAMPLES} resamples from the fixed "
+    f"seed {BOOTSTRAP_SEED}, so a rebuilt report is identical): each resample draws the training seeds with "
+    "replacement, then each drawn cell's episodes with replacement (its successes are binomial at its own rate), "
+    "and recomputes the summary; the interval is the 2.5-97.5 percentile. Train and shifted cells are resampled "
+    "independently (only counts are in the CSV), so gap intervals are somewhat wide; with S seeds a resample can "
+    "only take a few distinct seed sets (10 for 3 seeds), so with few seeds they are rough. A percentile interval "
+    "of a rank correlation or a count need not contain its point estimate: resampling breaks the point's ties and "
+    "adds noise."
+)
 
 
 def render(
@@ -82,6 +109,7 @@ def render(
             if len(cfg.seeds) > 1
             else " (one seed here: no standard error is shown, and the plots' error bars are absent, not zero)."
         ),
+        f"- {BOOTSTRAP_NOTE}",
         "",
     ]
     if not rows:
@@ -95,6 +123,7 @@ def render(
     lines += _pairs_section(cfg, rows)
     lines += _radius_section(cfg, rows)
     lines += _success_table(cfg, rows)
+    lines += _per_task_table(cfg, rows)
     lines += _cells_table(rows)
     lines += ["## Plots", ""]
     for path in plots:
@@ -110,16 +139,19 @@ def _ordering_section(cfg: StudyConfig, rows: list[dict]) -> list[str]:
     gaps = factor_ordering(rows, method, cfg.factors)
     ours = rank_hardest_first({f: v[0] for f, v in gaps.items()})
     rho = spearman(ours, PAPER_FACTOR_RANKS)
+    intervals = factor_gap_intervals(rows, method, cfg.factors)
     lines = [
         f"## Factor ordering ({method}, mean gap over tasks and N)",
         "",
-        "| factor | gap (mean ± SE over seeds) | our rank | paper rank |",
-        "|---|---|---|---|",
+        "| factor | gap (mean ± SE over seeds) | 95% interval (bootstrap) | our rank | paper rank |",
+        "|---|---|---|---|---|",
     ]
     for factor in sorted(gaps, key=lambda f: ours.get(f, 99)):
         paper = PAPER_FACTOR_RANKS.get(factor)
+        interval = ci(*intervals[factor][1:]) if factor in intervals else "[n/a]"
         lines.append(
-            f"| {factor} | {pm(*gaps[factor])} | {ours.get(factor, 'n/a')} | {paper if paper is not None else '—'} |"
+            f"| {factor} | {pm(*gaps[factor])} | {interval} | {ours.get(factor, 'n/a')} | "
+            f"{paper if paper is not None else '—'} |"
         )
     shared = [f for f in ours if f in PAPER_FACTOR_RANKS]
     lines.append("")
@@ -130,9 +162,12 @@ def _ordering_section(cfg: StudyConfig, rows: list[dict]) -> list[str]:
         )
     else:
         stated = spearman(ours, PAPER_FACTOR_RANKS_STATED)
+        rho_ci = ordering_rho_interval(rows, method, cfg.factors, PAPER_FACTOR_RANKS)
+        stated_ci = ordering_rho_interval(rows, method, cfg.factors, PAPER_FACTOR_RANKS_STATED)
         lines.append(
-            f"Spearman correlation with the paper's ordering over {len(shared)} factors: **{rho:+.2f}** "
-            f"(with only what the paper's text states, the four hard factors tied: {stated:+.2f})."
+            f"Spearman correlation with the paper's ordering over {len(shared)} factors: **{rho:+.2f}**, "
+            f"95% interval {ci(*rho_ci, digits=2)} (bootstrap) (with only what the paper's text states, the four "
+            f"hard factors tied: {stated:+.2f}, {ci(*stated_ci, digits=2)})."
         )
     if len(shared) >= 2:
         ours_r = dict(zip(shared, rerank([ours[f] for f in shared])))
@@ -177,37 +212,57 @@ def _pairs_section(cfg: StudyConfig, rows: list[dict]) -> list[str]:
         "## Pairs (mean ± SE over seeds, averaged over tasks and N)",
         "",
         "Pair metric = (P_A+B - min(P_A, P_B)) / min(P_A, P_B) (the paper's; undefined when the harder factor "
-        "never succeeds); interaction = gap(A+B) - gap(A) - gap(B).",
+        "never succeeds); interaction = gap(A+B) - gap(A) - gap(B). It is given two ways: **per cell** (the "
+        "metric of every task x N x seed cell, averaged over tasks and N per seed, then over seeds: the paper's "
+        "figure's way, a ratio averaged over cells, heavy-tailed when min(P_A, P_B) is small), and **pooled** "
+        "(the metric of success rates pooled over seeds per task x N, averaged over tasks and N). Each with its "
+        "95% bootstrap interval.",
         "",
         "A cell (task x N x seed) whose harder factor never succeeded has no pair metric; such cells are "
-        "left out of the mean, and the last column counts them: a pair with many undefined cells is among "
-        "the hardest, whatever its mean says.",
+        "left out of the per-cell mean, and the last column counts them (pooled: task x N cells whose pooled "
+        "harder factor never succeeded): a pair with many undefined cells is among the hardest, whatever its "
+        "mean says.",
         "",
-        "| method | pair | pair metric | interaction | cells without a pair metric |",
-        "|---|---|---|---|---|",
+        "| method | pair | pair metric (per cell) | 95% interval | pooled per task x N [95% interval] | "
+        "interaction | cells without a pair metric (pooled) |",
+        "|---|---|---|---|---|---|---|",
     ]
     cells: dict[tuple, list[bool]] = defaultdict(list)
     for row in pairs:
         cells[(row["method"], row["pair"])].append(math.isnan(row["pair_metric"]))
-    within = total = 0
+    tol = PAPER_PAIR_TOLERANCE
+    summaries = {method.name: pair_summary(rows, method.name, tol) for method in cfg.methods}
     for method in cfg.methods:
+        boot = summaries[method.name]
         for pair in cfg.pair_conditions():
             m = metric.get((method.name, pair))
             i = inter.get((method.name, pair))
             undefined = cells.get((method.name, pair), [])
             if m or i or undefined:
+                per_cell = boot.per_cell.get(pair) if boot else None
+                pooled = boot.pooled.get(pair) if boot else None
+                pooled_undefined = boot.pooled_undefined.get(pair) if boot else None
                 lines.append(
-                    f"| {method.name} | {pair} | {pm(*m[:2]) if m else 'n/a'} | {pm(*i[:2]) if i else 'n/a'} | "
-                    f"{sum(undefined)} of {len(undefined)} |"
+                    f"| {method.name} | {pair} | {pm(*m[:2]) if m else 'n/a'} | "
+                    f"{ci(*per_cell[1:]) if per_cell else '[n/a]'} | "
+                    f"{pm(pooled[0], math.nan) + ' ' + ci(*pooled[1:]) if pooled else 'n/a'} | "
+                    f"{pm(*i[:2]) if i else 'n/a'} | {sum(undefined)} of {len(undefined)}"
+                    + (f" ({pooled_undefined[0]} of {pooled_undefined[1]})" if pooled_undefined else "")
+                    + " |"
                 )
-                if m and not math.isnan(m[0]) and method is cfg.methods[0]:
-                    total += 1
-                    within += abs(m[0]) <= PAPER_PAIR_TOLERANCE
-    lines += [
-        "",
-        f"{within} of {total} pairs lie within ±6% for {cfg.methods[0].name} (paper: {PAPER_PAIRS_WITHIN}).",
-        "",
-    ]
+    first = cfg.methods[0].name
+    boot = summaries[first]
+    lines.append("")
+    if boot:
+        within, low, high = boot.within_per_cell
+        p_within, p_low, p_high = boot.within_pooled
+        lines += [
+            f"{within:.0f} of {boot.pairs_per_cell} pairs lie within ±{tol:.0%} for {first} with the per-cell metric "
+            f"(95% bootstrap interval of the count: {low:.0f}-{high:.0f}); {p_within:.0f} of {boot.pairs_pooled} "
+            f"with the pooled one ({p_low:.0f}-{p_high:.0f}). Paper: {PAPER_PAIRS_WITHIN}. Resampling adds noise "
+            "that moves metrics out of the band, so the count's interval leans below its point.",
+            "",
+        ]
     return lines
 
 
@@ -215,18 +270,31 @@ def _radius_section(cfg: StudyConfig, rows: list[dict]) -> list[str]:
     if not cfg.radius_factors or not radius_rows(rows, cfg.radius_factors):
         return []
     stats = gap_per_radius(rows, cfg.radius_factors)
+    slopes = radius_slopes(rows, cfg.radius_factors)
     radii = sorted({k[2] for k in stats})
+    step = f"{RADIUS_STEP_M:g} m"
     lines = [
         "## Gap versus radius (mean ± SE over seeds, averaged over tasks and N)",
         "",
-        "| method | factor | " + " | ".join(f"{r:g} m" for r in radii) + " |",
-        "|---|---|" + "---|" * len(radii),
+        f"Slope: least-squares slope of the mean gap on the radius, per {step} (one step of the appendix's radii), "
+        "with its 95% bootstrap interval.",
+        "",
+        "| method | factor | " + " | ".join(f"{r:g} m" for r in radii) + f" | slope per {step} [95% interval] |",
+        "|---|---|" + "---|" * (len(radii) + 1),
     ]
     for method in cfg.methods:
         for factor in cfg.radius_factors:
             cells = [stats.get((method.name, factor, r)) for r in radii]
+            slope = slopes.get((method.name, factor))
+            slope_text = (
+                f"{pm(slope[0] * RADIUS_STEP_M, math.nan)} {ci(slope[1] * RADIUS_STEP_M, slope[2] * RADIUS_STEP_M)}"
+                if slope
+                else "n/a"
+            )
             lines.append(
-                f"| {method.name} | {factor} | " + " | ".join(pm(*c[:2]) if c else "n/a" for c in cells) + " |"
+                f"| {method.name} | {factor} | "
+                + " | ".join(pm(*c[:2]) if c else "n/a" for c in cells)
+                + f" | {slope_text} |"
             )
     lines.append("")
     return lines
@@ -268,6 +336,42 @@ def _success_table(cfg: StudyConfig, rows: list[dict]) -> list[str]:
                     f"| {method.name} | {condition} | "
                     + " | ".join(
                         f"{c[0]:.2f}" + ("" if math.isnan(c[1]) else f" ± {c[1]:.2f}") if c else "n/a" for c in cells
+                    )
+                    + " |"
+                )
+    lines.append("")
+    return lines
+
+
+def _per_task_table(cfg: StudyConfig, rows: list[dict]) -> list[str]:
+    """Success per task and N of the main grid's train and single-factor conditions, pooled over seeds."""
+    conditions = [TRAIN_SUITE, *cfg.factors]
+    shown = [r for r in main_grid(rows) if r["condition"] in conditions]
+    pooled = pooled_success(shown, ["method", "task", "n_train_envs", "condition"])
+    if not pooled:
+        return []
+    seeds = len({r["seed"] for r in rows})
+    lines = [
+        f"## Success per task and N, pooled over the {seeds} seed(s)",
+        "",
+        "Successes / episodes pooled over training seeds, success rate with a 95% interval that accounts for the "
+        "pooling: the seed-level bootstrap's, widened where needed to contain the Wilson interval of the pooled "
+        "episodes (with one seed: the Wilson interval).",
+        "",
+        "| method | task | N | " + " | ".join(conditions) + " |",
+        "|---|---|---|" + "---|" * len(conditions),
+    ]
+    for method in cfg.methods:
+        for task in cfg.tasks:
+            for n in cfg.n_train_envs:
+                cells = [pooled.get((method.name, task, n, c)) for c in conditions]
+                if not any(cells):
+                    continue
+                lines.append(
+                    f"| {method.name} | {task} | {n} | "
+                    + " | ".join(
+                        f"{c[0]}/{c[1]} {c[0] / c[1]:.2f} {ci(c[2], c[3], digits=2, sign=False)}" if c else "n/a"
+                        for c in cells
                     )
                     + " |"
                 )

@@ -6,7 +6,11 @@
 - the paper's pair metric (P_{A+B} - min(P_A, P_B)) / min(P_A, P_B), and the interaction
   gap(A+B) - gap(A) - gap(B);
 - mean and standard error over training seeds;
-- the factor ordering (hardest first) and Spearman's rank correlation.
+- the factor ordering (hardest first) and Spearman's rank correlation;
+- the seed-level bootstrap behind every summary's 95% interval (:func:`seed_bootstrap`): resample the
+  training seeds, then the episodes within each drawn cell, recompute the summary, take percentiles;
+  with the vectorised pieces the summaries are computed from (:func:`group_mean`,
+  :func:`pair_metric_array`, :func:`ols_slope`, :func:`count_within`, :func:`pooled_rates`).
 
 The paper's own numbers, which these are compared with, are in ``paper.py``.
 """
@@ -14,9 +18,14 @@ The paper's own numbers, which these are compared with, are in ``paper.py``.
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
+
+import numpy as np
 
 Z95 = 1.959963984540054  # two-sided 95% normal quantile
+BOOTSTRAP_RESAMPLES = 2000  # resamples per interval (Efron & Tibshirani 1993: >= 1000 for percentile intervals)
+BOOTSTRAP_SEED = 0  # every interval restarts numpy's PCG64 from this seed: a report is the same on every rebuild
+BOOTSTRAP_CHUNK = 200  # resamples drawn (and held in memory) at a time
 
 
 def wilson_interval(successes: int, n: int, z: float = Z95) -> tuple[float, float]:
@@ -45,7 +54,14 @@ def paired_gap(train: Sequence[bool], shifted: Sequence[bool], z: float = Z95) -
     a = sum(1 for t, s in zip(train, shifted) if t and s)
     b = sum(1 for t, s in zip(train, shifted) if t and not s)
     c = sum(1 for t, s in zip(train, shifted) if not t and s)
-    d = n - a - b - c
+    return newcombe_paired(a, b, c, n - a - b - c, z)
+
+
+def newcombe_paired(a: float, b: float, c: float, d: float, z: float = Z95) -> tuple[float, float, float]:
+    """Gap and Newcombe's (1998, method 10) interval from the paired 2x2 table: ``a`` episodes succeed in
+    both conditions, ``b`` only in train, ``c`` only shifted, ``d`` in neither (expected, non-integer
+    counts are accepted: :mod:`.power` uses them)."""
+    n = a + b + c + d
     p1, p2 = (a + b) / n, (a + c) / n
     l1, u1 = wilson_interval(a + b, n, z)
     l2, u2 = wilson_interval(a + c, n, z)
@@ -140,3 +156,112 @@ def rerank(values: Sequence[float]) -> list[float]:
             ranks[order[k]] = (i + j) / 2 + 1
         i = j + 1
     return ranks
+
+
+# --- seed-level bootstrap -----------------------------------------------------------------------------
+
+
+def seed_bootstrap(
+    rates: np.ndarray,
+    episodes: np.ndarray,
+    statistic: Callable[[np.ndarray, np.ndarray], np.ndarray],
+    n_boot: int = BOOTSTRAP_RESAMPLES,
+    seed: int = BOOTSTRAP_SEED,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Point estimate and ``n_boot`` bootstrap replicates of ``statistic``, resampling seeds then episodes.
+
+    ``rates`` and ``episodes`` are (S, C): cell ``c``'s success rate and episode count for training seed
+    ``s`` (rate NaN: no such cell; episodes 0: count unknown, the rate is kept as it is). Each replicate
+    draws S seeds with replacement (a training seed is one dataset and one checkpoint per task and N, so
+    its cells move together), then resamples each drawn cell's episodes with replacement: its successes
+    are Binomial(episodes, rate), which is what resampling a cell's own episodes gives. A seed drawn twice
+    gets two independent episode resamples. Train and shifted cells are resampled independently (only
+    their counts are in ``results.csv``), which ignores the positive correlation of paired episodes and
+    so widens the intervals of gaps.
+
+    ``statistic(rates, episodes)`` maps (B, S, C) arrays to (B, ...); the point estimate is its value on
+    the data itself. Returns (point (...), replicates (n_boot, ...)); deterministic for a given ``seed``.
+    """
+    rates = np.asarray(rates, dtype=float)
+    episodes = np.asarray(episodes, dtype=float)
+    if rates.shape != episodes.shape or rates.ndim != 2:
+        raise ValueError(f"rates and episodes must both be (seeds, cells), got {rates.shape} and {episodes.shape}")
+    point = np.asarray(statistic(rates[None], episodes[None]))[0]
+    rng = np.random.default_rng(seed)
+    n_seeds = rates.shape[0]
+    out = []
+    for start in range(0, n_boot, BOOTSTRAP_CHUNK):
+        b = min(BOOTSTRAP_CHUNK, n_boot - start)
+        idx = rng.integers(0, n_seeds, size=(b, n_seeds))
+        r, n = rates[idx], episodes[idx]
+        known = (n > 0) & ~np.isnan(r)
+        k = rng.binomial(np.where(known, n, 0).astype(np.int64), np.where(known, r, 0.0).clip(0.0, 1.0))
+        out.append(np.asarray(statistic(np.where(known, k / np.where(known, n, 1.0), r), n)))
+    return point, np.concatenate(out)
+
+
+def percentile_interval(
+    replicates: np.ndarray, level: float = 0.95, min_defined: float = 0.5
+) -> tuple[np.ndarray, np.ndarray]:
+    """Percentile interval over axis 0, NaN replicates left out; NaN where fewer than ``min_defined`` of
+    the replicates are defined (the statistic is undefined too often to have an interval)."""
+    x = np.asarray(replicates, dtype=float)
+    defined = np.isfinite(x)
+    enough = defined.mean(axis=0) >= min_defined
+    alpha = (1 - level) / 2
+    filled = np.where(defined, x, np.nan)
+    filled = np.where(enough, filled, 0.0)  # columns without an interval: any value, masked below
+    lo = np.nanquantile(filled, alpha, axis=0)
+    hi = np.nanquantile(filled, 1 - alpha, axis=0)
+    return np.where(enough, lo, np.nan), np.where(enough, hi, np.nan)
+
+
+def nanmean(x: np.ndarray, axis: int, weights: np.ndarray | None = None) -> np.ndarray:
+    """Mean over ``axis`` of the defined (non-NaN) values, optionally weighted; NaN where none is defined."""
+    x = np.asarray(x, dtype=float)
+    defined = ~np.isnan(x)
+    w = defined.astype(float) if weights is None else np.where(defined, weights, 0.0)
+    total = w.sum(axis=axis)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return np.where(total > 0, (np.where(defined, x, 0.0) * w).sum(axis=axis) / total, np.nan)
+
+
+def group_mean(values: np.ndarray, groups: Sequence[Sequence[int]]) -> np.ndarray:
+    """(..., S, C) per-seed cell values -> (..., G): per group of columns, the mean over its columns per seed
+    (tasks, N), then the mean over seeds, each over defined values only (``aggregate.summary``'s rule)."""
+    per_seed = np.stack([nanmean(values[..., list(cols)], axis=-1) for cols in groups], axis=-1)  # (..., S, G)
+    return nanmean(per_seed, axis=-2)
+
+
+def pooled_rates(rates: np.ndarray, episodes: np.ndarray) -> np.ndarray:
+    """(..., S, C) -> (..., C): success pooled over seeds (successes / episodes; equal weights where the
+    episode counts are unknown)."""
+    weights = np.where(episodes > 0, episodes, 1.0)
+    return nanmean(rates, axis=-2, weights=weights)
+
+
+def pair_metric_array(p_ab: np.ndarray, p_a: np.ndarray, p_b: np.ndarray) -> np.ndarray:
+    """:func:`pair_metric` elementwise (NaN where the harder factor never succeeds)."""
+    harder = np.minimum(p_a, p_b)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return np.where(harder > 0, (p_ab - harder) / np.where(harder > 0, harder, 1.0), np.nan)
+
+
+def count_within(values: np.ndarray, tolerance: float) -> np.ndarray:
+    """(..., P) -> (...): how many of the defined values lie within ``±tolerance``."""
+    return (np.abs(np.nan_to_num(values, nan=np.inf)) <= tolerance).sum(axis=-1)
+
+
+def ols_slope(x: Sequence[float], y: np.ndarray) -> np.ndarray:
+    """Least-squares slope of ``y`` (..., R) on ``x`` (R), over the defined points; NaN with fewer than two."""
+    x = np.asarray(x, dtype=float)
+    y = np.asarray(y, dtype=float)
+    w = ~np.isnan(y)
+    count = w.sum(axis=-1)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        mx = (w * x).sum(axis=-1) / count
+        my = np.where(w, y, 0.0).sum(axis=-1) / count
+        dx = np.where(w, x - mx[..., None], 0.0)
+        sxx = (dx * dx).sum(axis=-1)
+        sxy = (dx * np.where(w, y - my[..., None], 0.0)).sum(axis=-1)
+        return np.where((count >= 2) & (sxx > 0), sxy / sxx, np.nan)

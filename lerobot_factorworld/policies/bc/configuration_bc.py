@@ -38,9 +38,14 @@ class BCConfig(PreTrainedConfig):
             ``r3m_rn50`` (R3M's ``model.pt``). Only read when a policy is created from scratch: the
             weights are then part of the policy's own checkpoint.
         augmentation: Training-only image augmentation, each image independently: ``none``, ``shift``
-            (replicate-pad ``shift_pad`` px, random crop back to size), ``color`` (torchvision ColorJitter
-            with brightness, contrast, saturation and hue ``color_jitter``, on each image with probability
-            ``color_prob``) or ``shift+color``.
+            (replicate-pad ``shift_pad`` px, random crop back to size), ``color`` (the paper's photometric
+            distortion, on each image with probability ``color_prob``: torchvision ColorJitter with
+            brightness, contrast, saturation and hue ``color_jitter``, then a random cutout with probability
+            ``cutout_prob``, then Gaussian pixel noise with probability ``noise_prob``) or ``shift+color``.
+        cutout_prob / cutout_size: Probability that a distorted image also gets one black rectangle, and the
+            range of its sides as fractions of the image's (default 0.12-0.35: 10-29 px at 84 px, RAD's).
+        noise_prob / noise_std: Probability that a distorted image also gets Gaussian noise, and its standard
+            deviation on pixels in [0, 1] (default 0.1, torchvision's ``GaussianNoise``), clipped to [0, 1].
         conv_channels / conv_kernel / conv_stride: The CNN (paper: 32, 64, 128, 128 filters of 4x4).
         latent_dim: Linear layer after the CNN (paper: 128), followed by LayerNorm and tanh.
         hidden_dim / mlp_layers: The head (paper: three layers of 256 units; the last outputs the action).
@@ -57,6 +62,10 @@ class BCConfig(PreTrainedConfig):
     shift_pad: int = 4
     color_jitter: float = 0.2
     color_prob: float = 0.3
+    cutout_prob: float = 0.5
+    cutout_size: tuple[float, float] = (0.12, 0.35)
+    noise_prob: float = 0.5
+    noise_std: float = 0.1
     conv_channels: tuple[int, ...] = (32, 64, 128, 128)
     conv_kernel: int = 4
     conv_stride: int = 2
@@ -93,6 +102,11 @@ class BCConfig(PreTrainedConfig):
             raise ValueError("mlp_layers and hidden_dim must be >= 1 and conv_channels non-empty")
         if not 0.0 <= self.color_prob <= 1.0 or self.shift_pad < 0 or self.feature_cache_size < 0:
             raise ValueError("color_prob must be in [0, 1]; shift_pad and feature_cache_size >= 0")
+        if not (0.0 <= self.cutout_prob <= 1.0 and 0.0 <= self.noise_prob <= 1.0 and self.noise_std >= 0):
+            raise ValueError("cutout_prob and noise_prob must be in [0, 1], noise_std >= 0")
+        self.cutout_size = tuple(self.cutout_size)
+        if len(self.cutout_size) != 2 or not 0.0 < self.cutout_size[0] <= self.cutout_size[1] <= 1.0:
+            raise ValueError(f"cutout_size must be (low, high) with 0 < low <= high <= 1, got {self.cutout_size}")
         self.conv_channels = tuple(self.conv_channels)
 
     @property

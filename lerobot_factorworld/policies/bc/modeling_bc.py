@@ -39,7 +39,16 @@ class BCNet(nn.Module):
     ) -> None:
         super().__init__()
         self.config, self.camera_keys = config, camera_keys
-        self.augment = ImageAugmentation(config.augmentation, config.shift_pad, config.color_jitter, config.color_prob)
+        self.augment = ImageAugmentation(
+            config.augmentation,
+            config.shift_pad,
+            config.color_jitter,
+            config.color_prob,
+            config.cutout_prob,
+            config.cutout_size,
+            config.noise_prob,
+            config.noise_std,
+        )
         image_shape = tuple(config.image_features[camera_keys[0]].shape)
         if config.trains_encoder:
             self.encoder: nn.Module = ConvEncoder(
