@@ -75,7 +75,8 @@ class CollectConfig:
         seed: Seed of the environments and of every episode (object start, action noise).
         cameras: Comma-separated cameras, each stored as ``observation.images.<camera>``.
         image_size: Square image side in pixels.
-        quality: Rendering quality (``fast`` or ``full``).
+        quality: Rendering quality (``fast``, ``full`` or ``lod``: ``scene.build.QUALITIES``); recorded with the
+            dataset, so frames of different qualities never mix.
         action_noise: Std of the Gaussian noise added to the expert's actions (public Factor World: 0.002).
         end_on_success: End episodes at the first success (else run to ``max_episode_steps``).
         max_episode_steps: Step limit per episode (``None``: the task's horizon).
@@ -437,7 +438,7 @@ def run_job(job: Job, settings: dict, parts_dir: str) -> dict:
             for demo in job.demo_indices:
                 for attempt in range(cfg.max_attempts):
                     seed = episode_seed(cfg.seed, job.task_index, job.env_index, demo, attempt)
-                    with timings.span("rollout"):
+                    with timings.span("expert_physics"):  # less the compilation and rendering inside
                         episode = rollout(env, policy, seed, cfg.action_noise)
                     if episode.success:
                         break
@@ -466,11 +467,6 @@ def run_job(job: Job, settings: dict, parts_dir: str) -> dict:
         with timings.span("finalize"):
             dataset.finalize()
         env.close()
-    seconds = timings.seconds
-    # the rollouts' time less what was timed inside them: the expert's actions and the physics
-    inner = seconds.get("render", 0.0) + seconds.get("env_build", 0.0)
-    timings.add("expert_physics", seconds.get("rollout", 0.0) - inner)
-    timings.seconds.pop("rollout", None)
     result = {
         "job_id": job.job_id,
         "task": job.task,

@@ -25,6 +25,7 @@ from ..families import all_families, condition_family, family_of
 from ..protocol.conditions import PAIR_SEPARATOR, condition_name, parse_shift
 from ..protocol.sampling import SamplingOptions
 from ..tasks import get_task
+from .steps import EXECUTIONS  # how steps run, never what they compute
 
 EXECUTORS = ("local", "ray")
 ALL_PAIRS = "all"
@@ -265,7 +266,14 @@ class StudyConfig:
         executor: ``local`` (a process pool on this machine) or ``ray``.
         workers: Steps run at once (local pool size, or concurrent Ray tasks).
         ray_address: Ray cluster address (``None``: start a local Ray instance).
+        execution: How steps run, never what they compute (same keys, results, checkpoints, datasets):
+            ``grouped`` (default) trains inside the worker process and evaluates all conditions of a
+            checkpoint in one task as soon as it exists (policy loaded once); ``per_step`` runs
+            ``lerobot-train`` as a subprocess and every evaluation as its own task (the earlier way).
         dry_run: Print the plan (steps per kind, cached, cost estimate) and stop.
+        profile: Run nothing; print where the finished steps' time went (per kind and component).
+        fit_cost: Run nothing; refit the ``--dry-run`` cost model's constants from the finished steps'
+            timings and write them to ``study/cost_model.json``.
     """
 
     name: str = "study"
@@ -285,7 +293,10 @@ class StudyConfig:
     executor: str = "local"
     workers: int = 1
     ray_address: str | None = None
+    execution: str = "grouped"
     dry_run: bool = False
+    profile: bool = False
+    fit_cost: bool = False
 
     def __post_init__(self) -> None:
         self.methods = [m if isinstance(m, MethodConfig) else MethodConfig(**m) for m in self.methods]
@@ -343,6 +354,8 @@ class StudyConfig:
         check_device("eval.device", self.eval.device)
         if self.executor not in EXECUTORS:
             raise ValueError(f"unknown executor {self.executor!r}; valid executors: {', '.join(EXECUTORS)}")
+        if self.execution not in EXECUTIONS:
+            raise ValueError(f"unknown execution {self.execution!r}; valid: {', '.join(EXECUTIONS)}")
         if self.workers < 1:
             raise ValueError(f"workers must be at least 1, got {self.workers}")
         if min(self.n_train_envs) < 1 or len(set(self.n_train_envs)) != len(self.n_train_envs):

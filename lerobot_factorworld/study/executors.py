@@ -1,7 +1,8 @@
 """Executors run the steps they are handed and nothing else: a local process pool (default) or Ray.
 
-Both call :func:`~lerobot_factorworld.study.steps.run_step` with the same arguments and the steps fix
-their own thread counts, so a plan gives the same results on either. With Ray across several
+A task is a list of steps run one after another in one worker (one step, or the evaluations of one
+checkpoint): both executors call :func:`~lerobot_factorworld.study.steps.run_steps` with the same
+arguments and the steps fix their own thread counts, so a plan gives the same results on either. With Ray across several
 machines the study folder must be on a filesystem they share (steps read their inputs' outputs).
 """
 
@@ -12,34 +13,39 @@ from collections.abc import Sequence
 from multiprocessing import get_context
 from typing import Any, Protocol
 
-from .steps import Step, run_step
+from .steps import Step, run_steps, warm_up
 
 
 class Executor(Protocol):
-    def submit(self, step: Step) -> Any: ...
+    def submit(self, steps: Sequence[Step]) -> Any: ...
 
     def wait_any(self, handles: list[Any]) -> list[Any]: ...
 
-    def result(self, handle: Any) -> dict[str, Any]: ...
+    def result(self, handle: Any) -> dict[str, str | None]: ...  # step key -> None (done) or its error
 
     def shutdown(self) -> None: ...
 
 
 class LocalExecutor:
-    """``workers`` fresh (spawned) processes on this machine; each step runs in one of them."""
+    """``workers`` fresh (spawned) processes on this machine, kept for the whole study (imports are paid
+    once per worker); each task runs in one of them."""
 
-    def __init__(self, study_dir: str, workers: int) -> None:
+    def __init__(self, study_dir: str, workers: int, execution: str = "per_step") -> None:
         self.study_dir = study_dir
+        self.execution = execution
         self.pool = cf.ProcessPoolExecutor(workers, mp_context=get_context("spawn"))
+        if execution == "grouped":  # every worker starts and imports now, in parallel, not in its first step
+            for _ in range(workers):
+                self.pool.submit(warm_up)
 
-    def submit(self, step: Step) -> cf.Future:
-        return self.pool.submit(run_step, step.to_dict(), self.study_dir)
+    def submit(self, steps: Sequence[Step]) -> cf.Future:
+        return self.pool.submit(run_steps, [s.to_dict() for s in steps], self.study_dir, self.execution)
 
     def wait_any(self, handles: list[cf.Future]) -> list[cf.Future]:
         done, _ = cf.wait(handles, return_when=cf.FIRST_COMPLETED)
         return list(done)
 
-    def result(self, handle: cf.Future) -> dict[str, Any]:
+    def result(self, handle: cf.Future) -> dict[str, str | None]:
         return handle.result()
 
     def shutdown(self) -> None:
@@ -51,13 +57,21 @@ class RayExecutor:
     CPUs (threads, collection workers) and GPU its step uses. A request the cluster can never grant would
     leave its task pending forever, so the steps are checked against the cluster before any is submitted."""
 
-    def __init__(self, study_dir: str, workers: int, address: str | None = None, steps: Sequence[Step] = ()) -> None:
+    def __init__(
+        self,
+        study_dir: str,
+        workers: int,
+        address: str | None = None,
+        steps: Sequence[Step] = (),
+        execution: str = "per_step",
+    ) -> None:
         try:  # deliberately here: ray is an optional dependency, needed only by this executor
             import ray  # noqa: PLC0415
         except ImportError:
             raise ValueError("executor=ray needs the ray package: pip install 'ray>=2.40'") from None
         self.ray = ray
         self.study_dir = study_dir
+        self.execution = execution
         self._started = not ray.is_initialized()
         requests = [step_resources(s) for s in steps]
         if self._started:
@@ -68,16 +82,17 @@ class RayExecutor:
         except ValueError:
             self.shutdown()
             raise
-        self._run = ray.remote(num_cpus=1, max_retries=0)(run_step)
+        self._run = ray.remote(num_cpus=1, max_retries=0)(run_steps)
 
-    def submit(self, step: Step):
-        return self._run.options(**step_resources(step)).remote(step.to_dict(), self.study_dir)
+    def submit(self, steps: Sequence[Step]):
+        resources = step_resources(steps[0])  # a task's steps are of one kind and ask for the same
+        return self._run.options(**resources).remote([s.to_dict() for s in steps], self.study_dir, self.execution)
 
     def wait_any(self, handles: list) -> list:
         done, _ = self.ray.wait(handles, num_returns=1)
         return done
 
-    def result(self, handle) -> dict[str, Any]:
+    def result(self, handle) -> dict[str, str | None]:
         return self.ray.get(handle)
 
     def shutdown(self) -> None:
@@ -121,10 +136,41 @@ def check_feasible(requests: Sequence[dict[str, float]], cluster: dict[str, floa
         )
 
 
+def task_units(ready: list[Step], free: int, grouped: bool) -> list[list[Step]]:
+    """The worker tasks for the ``ready`` steps, in their order: one step each, or (``grouped``) the ready
+    evaluations of one checkpoint together (its policy loaded once), a checkpoint's group split in halves
+    while fewer tasks than ``free`` workers would leave one idle."""
+    if not grouped:
+        return [[step] for step in ready]
+    units: list[list[Step]] = []
+    by_checkpoint: dict[str, list[Step]] = {}
+    for step in ready:
+        if step.kind != "eval":
+            units.append([step])
+        elif step.deps[0] in by_checkpoint:
+            by_checkpoint[step.deps[0]].append(step)
+        else:
+            by_checkpoint[step.deps[0]] = [step]
+            units.append(by_checkpoint[step.deps[0]])
+    while len(units) < free:
+        largest = max(range(len(units)), key=lambda i: len(units[i]), default=None)
+        if largest is None or len(units[largest]) < 2:
+            break
+        unit = units[largest]
+        half = (len(unit) + 1) // 2
+        units[largest : largest + 1] = [unit[:half], unit[half:]]
+    return units
+
+
 def make_executor(
-    kind: str, study_dir: str, workers: int, ray_address: str | None = None, steps: Sequence[Step] = ()
+    kind: str,
+    study_dir: str,
+    workers: int,
+    ray_address: str | None = None,
+    steps: Sequence[Step] = (),
+    execution: str = "per_step",
 ) -> Executor:
     """The executor for ``steps`` (Ray checks them against its cluster before any runs)."""
     if kind == "ray":
-        return RayExecutor(study_dir, workers, ray_address, steps)
-    return LocalExecutor(study_dir, workers)
+        return RayExecutor(study_dir, workers, ray_address, steps, execution)
+    return LocalExecutor(study_dir, workers, execution)

@@ -219,13 +219,13 @@ def _pairs_section(cfg: StudyConfig, rows: list[dict]) -> list[str]:
         "95% bootstrap interval.",
         "",
         "A cell (task x N x seed) whose harder factor never succeeded has no pair metric; such cells are "
-        "left out of the per-cell mean, and the last column counts them (pooled: task x N cells whose pooled "
-        "harder factor never succeeded): a pair with many undefined cells is among the hardest, whatever its "
+        "left out of the per-cell mean, and the last two columns count them (per cell, and per task x N cell whose "
+        "pooled harder factor never succeeded): a pair with many undefined cells is among the hardest, whatever its "
         "mean says.",
         "",
         "| method | pair | pair metric (per cell) | 95% interval | pooled per task x N [95% interval] | "
-        "interaction | cells without a pair metric (pooled) |",
-        "|---|---|---|---|---|---|---|",
+        "interaction | cells without a pair metric | pooled cells without one |",
+        "|---|---|---|---|---|---|---|---|",
     ]
     cells: dict[tuple, list[bool]] = defaultdict(list)
     for row in pairs:
@@ -246,8 +246,8 @@ def _pairs_section(cfg: StudyConfig, rows: list[dict]) -> list[str]:
                     f"| {method.name} | {pair} | {pm(*m[:2]) if m else 'n/a'} | "
                     f"{ci(*per_cell[1:]) if per_cell else '[n/a]'} | "
                     f"{pm(pooled[0], math.nan) + ' ' + ci(*pooled[1:]) if pooled else 'n/a'} | "
-                    f"{pm(*i[:2]) if i else 'n/a'} | {sum(undefined)} of {len(undefined)}"
-                    + (f" ({pooled_undefined[0]} of {pooled_undefined[1]})" if pooled_undefined else "")
+                    f"{pm(*i[:2]) if i else 'n/a'} | {sum(undefined)} of {len(undefined)} | "
+                    + (f"{pooled_undefined[0]} of {pooled_undefined[1]}" if pooled_undefined else "n/a")
                     + " |"
                 )
     first = cfg.methods[0].name

@@ -14,6 +14,7 @@ from .config import StudyConfig
 from .markdown import REPORT_FILE, render
 from .plan import Plan, make_plan
 from .plots import write_plots
+from .profile import profile_markdown
 from .results import RESULTS_FILE, finished_evaluations, result_rows, write_results
 
 
@@ -35,7 +36,11 @@ def write_report(cfg: StudyConfig, plan: Plan, study_dir: str | Path, command: s
             )
         ]
 
-    report = atomic_write_text(study_dir / REPORT_FILE, render(cfg, plan, rows, plots, command, family_sections))
+    text = render(cfg, plan, rows, plots, command, family_sections)
+    timing = profile_markdown(plan, study_dir)  # where the time went: last, it is about the run, not the results
+    report = atomic_write_text(
+        study_dir / REPORT_FILE, text.rstrip("\n") + "\n\n" + "\n".join(timing) if timing else text
+    )
     return csv_path, report, plots
 
 

@@ -11,6 +11,7 @@ import fcntl
 import os
 import shlex
 import sys
+import time
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
@@ -18,9 +19,10 @@ from tqdm import tqdm
 
 from ..core.io import atomic_write_json
 from .config import StudyConfig
-from .cost import describe
-from .executors import make_executor
+from .cost import describe, fit_cost_model
+from .executors import make_executor, task_units
 from .plan import Plan, make_plan
+from .profile import profile_text, record_run
 from .report import write_report
 from .steps import KINDS, Step, is_done
 
@@ -42,11 +44,17 @@ class StudyOutcome:
 
 
 def run_study(cfg: StudyConfig, command: str | None = None) -> StudyOutcome | str:
-    """Run (or resume) ``cfg``; with ``dry_run`` return the plan's description instead."""
+    """Run (or resume) ``cfg``; with ``dry_run``, ``profile`` or ``fit_cost`` return the plan's description,
+    where the finished steps' time went, or what the refitted cost model found, instead (nothing runs)."""
+    start = time.perf_counter()
     plan = make_plan(cfg)
     study_dir = Path(cfg.out_dir)
     if cfg.dry_run:
         return describe(cfg, plan)
+    if cfg.profile:
+        return profile_text(plan, study_dir)
+    if cfg.fit_cost:
+        return fit_cost_model(cfg, plan, study_dir)
     cfg.check_weight_files()  # before any step runs: weights are never downloaded
     study_dir.mkdir(parents=True, exist_ok=True)
     command = command or "factorworld study " + " ".join(shlex.quote(a) for a in sys.argv[2:])
@@ -56,6 +64,8 @@ def run_study(cfg: StudyConfig, command: str | None = None) -> StudyOutcome | st
             study_dir / PLAN_FILE, [s.to_dict() for s in plan.steps], indent=1, sort_keys=True, default=str
         )
         outcome = _execute(cfg, plan, study_dir)
+        if any(outcome.ran.values()):  # before the report, which states it
+            record_run(study_dir, time.perf_counter() - start, cfg.workers, cfg.execution, outcome.ran)
         outcome.results, outcome.report, outcome.plots = write_report(cfg, plan, study_dir, command)
     return outcome
 
@@ -69,7 +79,7 @@ def _execute(cfg: StudyConfig, plan: Plan, study_dir: Path) -> StudyOutcome:
         outcome.ran[kind] = 0
     if not todo:
         return outcome
-    executor = make_executor(cfg.executor, str(study_dir.resolve()), cfg.workers, cfg.ray_address, todo)
+    executor = make_executor(cfg.executor, str(study_dir.resolve()), cfg.workers, cfg.ray_address, todo, cfg.execution)
     bars = {
         kind: tqdm(total=sum(1 for s in todo if s.kind == kind), desc=f"{kind:7s}", unit="step", position=i)
         for i, kind in enumerate(k for k in KINDS if any(s.kind == k for s in todo))
@@ -87,23 +97,30 @@ def _execute(cfg: StudyConfig, plan: Plan, study_dir: Path) -> StudyOutcome:
                 bars[step.kind].update(1)
             ready = [s for s in pending if all(d in done for d in s.deps)]
             ready.sort(key=lambda s: -KINDS.index(s.kind))  # finish cells before starting new ones: early results
-            for step in ready[: max(0, cfg.workers - len(running))]:
-                pending.remove(step)
-                running[executor.submit(step)] = step
+            free = max(0, cfg.workers - len(running))
+            for unit in task_units(ready, free, grouped=cfg.execution == "grouped")[:free]:
+                for step in unit:
+                    pending.remove(step)
+                running[executor.submit(unit)] = unit
             if not running:
                 break
             for handle in executor.wait_any(list(running)):
-                step = running.pop(handle)
+                unit = running.pop(handle)
                 try:
-                    executor.result(handle)
-                    done.add(step.key)
-                    outcome.ran[step.kind] += 1
-                except Exception as err:  # noqa: BLE001 - reported, dependents skipped, rerun resumes
-                    failed.add(step.key)
-                    outcome.failed[step.label] = f"{type(err).__name__}: {err}"
-                    (step.folder(study_dir)).mkdir(parents=True, exist_ok=True)
-                    (step.folder(study_dir) / "error.txt").write_text(outcome.failed[step.label])
-                bars[step.kind].update(1)
+                    errors = executor.result(handle)
+                except Exception as err:  # noqa: BLE001 - the worker died: every step of the task failed
+                    errors = {step.key: f"{type(err).__name__}: {err}" for step in unit}
+                for step in unit:
+                    error = errors.get(step.key, "the worker returned no result for this step")
+                    if error is None:
+                        done.add(step.key)
+                        outcome.ran[step.kind] += 1
+                    else:  # reported, dependents skipped, rerun resumes
+                        failed.add(step.key)
+                        outcome.failed[step.label] = error
+                        (step.folder(study_dir)).mkdir(parents=True, exist_ok=True)
+                        (step.folder(study_dir) / "error.txt").write_text(error)
+                    bars[step.kind].update(1)
     finally:
         executor.shutdown()
         for bar in bars.values():

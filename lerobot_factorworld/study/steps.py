@@ -14,11 +14,13 @@ moved study folder still resumes.
 from __future__ import annotations
 
 import contextlib
+import contextvars
 import functools
 import hashlib
 import json
 import math
 import os
+import re
 import shutil
 import subprocess
 import sys
@@ -30,6 +32,7 @@ from typing import Any
 
 from .. import __version__  # the package root registers the env and policy types (in a fresh worker too)
 from ..core.io import atomic_write_text
+from ..core.timing import Timings
 from ..families import family_of
 from ..protocol.conditions import TRAIN_SUITE, fingerprint
 from ..protocol.coverage import coverage
@@ -47,6 +50,11 @@ CHECKPOINT = "checkpoints/last/pretrained_model"
 RUN = "run"  # meta entry: how to run a step, without changing its results (not in the key, not in labels)
 RESULT_PATHS = ("root", "checkpoint")  # result entries that name files: stored relative to the study folder
 DISTRIBUTION = "lerobot_env_factorworld"
+TIMINGS = "timings"  # result entry: where the step's time went (seconds); never in a key or in results.csv
+# How steps run (never what they compute: the same step keys, results, checkpoints and datasets either way):
+# ``per_step`` runs every step on its own (``lerobot-train`` as a subprocess, each evaluation loading its
+# policy); ``grouped`` trains in the worker process and evaluates all conditions of a checkpoint in one task.
+EXECUTIONS = ("grouped", "per_step")
 VERSIONED = ("lerobot", "torch", "mujoco", "metaworld")  # packages whose version changes what a step computes
 
 
@@ -158,9 +166,15 @@ def _portable(result: dict[str, Any], study_dir: Path) -> dict[str, Any]:
     return out
 
 
-def run_step(step_data: dict[str, Any], study_dir: str) -> dict[str, Any]:
-    """Run one step (in a worker process or a Ray task) and return its result. Idempotent."""
+def run_step(step_data: dict[str, Any], study_dir: str, execution: str = "per_step") -> dict[str, Any]:
+    """Run one step (in a worker process or a Ray task) and return its result. Idempotent.
+
+    ``execution`` (``EXECUTIONS``) chooses how, never what: ``grouped`` trains in this process and reuses
+    a loaded policy across the conditions of its checkpoint. The result records where the time went
+    (``timings``: seconds per component, ``total`` the step's own wall time)."""
     os.environ.setdefault("MUJOCO_GL", "egl")
+    if execution not in EXECUTIONS:
+        raise ValueError(f"unknown execution {execution!r}; valid: {', '.join(EXECUTIONS)}")
     step = Step.from_dict(step_data)
     folder = step.folder(study_dir)
     if (folder / RESULT_FILE).is_file():
@@ -169,12 +183,60 @@ def run_step(step_data: dict[str, Any], study_dir: str) -> dict[str, Any]:
     atomic_write_text(folder / INPUTS_FILE, json.dumps(step.to_dict(), indent=1, sort_keys=True))
     deps = [_dep_folder(study_dir, key) for key in step.deps]
     start = time.perf_counter()
-    with _output_to(folder / LOG_FILE):  # progress bars of collection and evaluation go to the step's log
-        result = RUNNERS[step.kind](step, folder, deps)
+    timings = Timings()
+    token = _CURRENT.set((timings, execution))
+    try:
+        with _output_to(folder / LOG_FILE):  # progress bars of collection and evaluation go to the step's log
+            result = RUNNERS[step.kind](step, folder, deps)
+    finally:
+        _CURRENT.reset(token)
     result["seconds"] = round(time.perf_counter() - start, 2)
+    timings.add("total", time.perf_counter() - start)
+    result[TIMINGS] = timings.as_dict()
     stored = _portable(result, Path(study_dir))
     atomic_write_text(folder / RESULT_FILE, json.dumps(stored, indent=1, sort_keys=True))
     return result
+
+
+# (timings, execution) of the step this process runs now: what the runners record into, and how they run
+_CURRENT: contextvars.ContextVar[tuple[Timings, str]] = contextvars.ContextVar("study_step")
+
+
+def _current() -> tuple[Timings, str]:
+    """The running step's timings and execution (fresh ones when a runner is called on its own)."""
+    return _CURRENT.get((Timings(), "per_step"))
+
+
+def warm_up() -> float:
+    """Import what steps import (torch, LeRobot's dataset, training and evaluation stacks, the simulation)
+    and return the seconds it took: a ``grouped`` worker does it as soon as the pool starts, all workers at
+    once, instead of each paying it in the middle of its first step (on the study's critical path)."""
+    start = time.perf_counter()
+    os.environ.setdefault("MUJOCO_GL", "egl")
+    # Deliberately here: these are the heavy imports of a step (seconds), wanted in workers only.
+    import lerobot.datasets.lerobot_dataset  # noqa: F401, PLC0415
+    import lerobot.scripts.lerobot_eval  # noqa: F401, PLC0415
+    import lerobot.scripts.lerobot_train  # noqa: F401, PLC0415
+
+    from ..datasets import collect  # noqa: F401, PLC0415
+    from ..envs import factor_env  # noqa: F401, PLC0415
+
+    return time.perf_counter() - start
+
+
+def run_steps(steps_data: list[dict[str, Any]], study_dir: str, execution: str = "per_step") -> dict[str, str | None]:
+    """Run ``steps_data`` one after another in this process (e.g. the evaluations of one checkpoint, which
+    then share the loaded policy); ``{key: None}`` for a finished step, ``{key: error}`` for a failed one
+    (the others still run). Each step writes its own ``result.json`` as :func:`run_step` does."""
+    out: dict[str, str | None] = {}
+    for data in steps_data:
+        key = Step.from_dict(data).key
+        try:
+            run_step(data, study_dir, execution)
+            out[key] = None
+        except Exception as err:  # noqa: BLE001 - reported per step by the runner, as a lone step's error
+            out[key] = f"{type(err).__name__}: {err}"
+    return out
 
 
 @contextlib.contextmanager
@@ -243,10 +305,12 @@ def collect_config(inputs: CollectInputs | dict[str, Any], root: Path, key: str,
 
 
 def _run_collect(step: Step, folder: Path, deps: list[Path]) -> dict[str, Any]:
-    # Deliberately here: LeRobot's dataset code (seconds to import), only in the process that collects.
-    from lerobot.datasets.lerobot_dataset import LeRobotDatasetMetadata  # noqa: PLC0415
+    timings, execution = _current()
+    with timings.span("imports"):
+        # Deliberately here: LeRobot's dataset code (seconds to import), only in the process that collects.
+        from lerobot.datasets.lerobot_dataset import LeRobotDatasetMetadata  # noqa: PLC0415
 
-    from ..datasets.collect import SIDECAR, collect  # noqa: PLC0415
+        from ..datasets.collect import SIDECAR, collect  # noqa: PLC0415
 
     root = folder / DATA_DIR
     cfg = collect_config(step.inputs, root, step.key, step.run.get("workers", 1))
@@ -260,6 +324,7 @@ def _run_collect(step: Step, folder: Path, deps: list[Path]) -> dict[str, Any]:
             "failures": {},
         }
     report = collect(cfg)
+    timings.update(report.timings)
     return {
         "root": str(root),
         "repo_id": cfg.repo_id,
@@ -292,6 +357,7 @@ def train_steps(inputs: TrainInputs, frames: int) -> int:
 
 
 def _run_train(step: Step, folder: Path, deps: list[Path]) -> dict[str, Any]:
+    timings, execution = _current()
     data = read_result(_dep_of_kind(deps, "collect"))
     inputs = TrainInputs.from_dict(step.inputs)
     policy = step.run.get("policy", inputs.policy)  # absolute paths; the key holds their content hashes
@@ -319,8 +385,28 @@ def _run_train(step: Step, folder: Path, deps: list[Path]) -> dict[str, Any]:
         f"--output_dir={out}",
         *extra_args,
     ]
-    threads = str(inputs.threads)
-    env = {**os.environ, "OMP_NUM_THREADS": threads, "MKL_NUM_THREADS": threads, "TOKENIZERS_PARALLELISM": "false"}
+    start = time.perf_counter()
+    log_start = (folder / LOG_FILE).stat().st_size if (folder / LOG_FILE).is_file() else 0
+    if execution == "grouped":
+        _train_in_process(cmd[3:], folder, inputs.threads, timings)
+    else:
+        _train_subprocess(cmd, folder, inputs.threads)
+    checkpoint = out / CHECKPOINT
+    if not checkpoint.is_dir():
+        raise RuntimeError(f"lerobot-train finished without a checkpoint at {checkpoint}")
+    with open(folder / LOG_FILE, "rb") as log:
+        log.seek(log_start)
+        logged = train_log_seconds(log.read().decode(errors="replace"), steps)
+    timings.update(logged)
+    # what is left: process start and imports (subprocess), dataset and policy set-up, checkpoint saving
+    timings.add("startup_save", time.perf_counter() - start - sum(logged.values()) - timings.seconds.get("imports", 0))
+    return {"checkpoint": str(checkpoint), "steps": steps}
+
+
+def _train_subprocess(cmd: list[str], folder: Path, threads: int) -> None:
+    """``lerobot-train`` in a new Python process (the ``per_step`` execution)."""
+    n = str(threads)
+    env = {**os.environ, "OMP_NUM_THREADS": n, "MKL_NUM_THREADS": n, "TOKENIZERS_PARALLELISM": "false"}
     with open(folder / LOG_FILE, "a") as log:
         log.write(" ".join(cmd) + "\n")
         log.flush()
@@ -328,10 +414,61 @@ def _run_train(step: Step, folder: Path, deps: list[Path]) -> dict[str, Any]:
     if proc.returncode != 0:
         tail = (folder / LOG_FILE).read_text()[-2000:]
         raise RuntimeError(f"lerobot-train failed (exit {proc.returncode}); log {folder / LOG_FILE}:\n{tail}")
-    checkpoint = out / CHECKPOINT
-    if not checkpoint.is_dir():
-        raise RuntimeError(f"lerobot-train finished without a checkpoint at {checkpoint}")
-    return {"checkpoint": str(checkpoint), "steps": steps}
+
+
+def _train_in_process(args: list[str], folder: Path, threads: int, timings: Timings) -> None:
+    """``lerobot-train`` with ``args`` in this (persistent worker) process: no interpreter start and no
+    imports per run. Everything the subprocess would have fixed at its start is fixed here too (torch's
+    threads, the working directory, the command line LeRobot parses; ``lerobot-train`` seeds every RNG
+    itself), so the checkpoint is byte-identical to the subprocess's (``scripts/bench_study.py`` checks)."""
+    import torch  # noqa: PLC0415 - deliberately here: only a training (or evaluating) worker needs torch
+
+    with timings.span("imports"):
+        from lerobot.scripts import lerobot_train  # noqa: PLC0415 - LeRobot's training stack (seconds, once)
+
+    saved = (list(sys.argv), os.getcwd(), torch.get_num_threads(), os.environ.get("TOKENIZERS_PARALLELISM"))
+    print("lerobot-train (in process) " + " ".join(args), flush=True)
+    sys.argv = ["lerobot-train", *args]
+    os.environ["TOKENIZERS_PARALLELISM"] = "false"
+    torch.set_num_threads(threads)
+    os.chdir(folder)
+    try:
+        lerobot_train.main()
+    except SystemExit as err:  # draccus exits on a bad flag
+        raise RuntimeError(f"lerobot-train failed (exit {err.code}); log {folder / LOG_FILE}") from None
+    finally:
+        sys.argv, cwd, n, tokenizers = saved
+        os.chdir(cwd)
+        torch.set_num_threads(n)
+        if tokenizers is None:
+            os.environ.pop("TOKENIZERS_PARALLELISM", None)
+        else:
+            os.environ["TOKENIZERS_PARALLELISM"] = tokenizers
+        _reset_accelerate()
+
+
+def _reset_accelerate() -> None:
+    """Forget accelerate's process-wide state, so that the next in-process training starts as a new
+    process would."""
+    from accelerate.state import AcceleratorState, GradientState, PartialState  # noqa: PLC0415 - with lerobot-train only
+
+    for state in (AcceleratorState, GradientState, PartialState):
+        state._reset_state()
+
+
+_TRAIN_LOG = re.compile(r"updt_s:([0-9.]+).*?data_s:([0-9.]+)")
+
+
+def train_log_seconds(log: str, steps: int) -> dict[str, float]:
+    """``{"update": s, "data": s}`` of a ``lerobot-train`` log: the mean of its logged per-step averages
+    (``updt_s``, ``data_s``) times the steps run; ``{}`` when it logged none."""
+    found = [(float(u), float(d)) for u, d in _TRAIN_LOG.findall(log)]
+    if not found:
+        return {}
+    return {
+        "update": steps * sum(u for u, _ in found) / len(found),
+        "data": steps * sum(d for _, d in found) / len(found),
+    }
 
 
 # --- eval ---------------------------------------------------------------------------------------
@@ -357,17 +494,16 @@ def eval_env_config(collect: CollectInputs, data_root: str, inputs: EvalInputs):
 
 
 def _run_eval(step: Step, folder: Path, deps: list[Path]) -> dict[str, Any]:
-    # Deliberately here: torch and LeRobot's evaluation stack (seconds to import), only in the process
-    # that evaluates.
-    import torch  # noqa: PLC0415
-    from lerobot.configs.policies import PreTrainedConfig  # noqa: PLC0415
-    from lerobot.envs.factory import make_env, make_env_pre_post_processors  # noqa: PLC0415
-    from lerobot.policies.factory import make_policy, make_pre_post_processors  # noqa: PLC0415
-    from lerobot.scripts.lerobot_eval import eval_policy_all  # noqa: PLC0415
-    from lerobot.utils.import_utils import register_third_party_plugins  # noqa: PLC0415
-    from lerobot.utils.random_utils import set_seed  # noqa: PLC0415
+    timings, execution = _current()
+    with timings.span("imports"):  # paid once per worker process: later steps find them imported
+        # Deliberately here: torch and LeRobot's evaluation stack (seconds to import), only in the process
+        # that evaluates; the simulation too (timed below), which planning never needs.
+        import torch  # noqa: PLC0415
+        from lerobot.envs.factory import make_env, make_env_pre_post_processors  # noqa: PLC0415
+        from lerobot.scripts.lerobot_eval import eval_policy_all  # noqa: PLC0415
 
-    register_third_party_plugins()  # as lerobot-eval does: Factor World's env and policy types, and any other plugin
+        from ..envs.factor_env import FactorWorldEnv  # noqa: PLC0415
+        from ..envs.runtime import CompiledScene  # noqa: PLC0415
 
     inputs, run = EvalInputs.from_dict(step.inputs), step.run
     torch.set_num_threads(run.get("threads", 1))
@@ -379,19 +515,24 @@ def _run_eval(step: Step, folder: Path, deps: list[Path]) -> dict[str, Any]:
     task = env_cfg.task_names[0]
     configs = env_cfg.suites(task)[inputs.condition]
 
-    policy_cfg = PreTrainedConfig.from_pretrained(checkpoint)
-    policy_cfg.pretrained_path = Path(checkpoint)
-    policy_cfg.device = _eval_device(inputs.device)
-    set_seed(inputs.start_seed)
-    policy = make_policy(cfg=policy_cfg, env_cfg=env_cfg)
-    preprocessor, postprocessor = make_pre_post_processors(
-        policy_cfg=policy_cfg,
-        pretrained_path=checkpoint,
-        preprocessor_overrides={"device_processor": {"device": str(policy_cfg.device)}},
-    )
-    env_pre, env_post = make_env_pre_post_processors(env_cfg=env_cfg, policy_cfg=policy_cfg)
-    envs = make_env(env_cfg, n_envs=run.get("batch_size", 1), use_async_envs=False)
-    with torch.no_grad():
+    with timings.span("policy_load"):
+        policy_cfg, policy, preprocessor, postprocessor = _load_policy(
+            checkpoint, env_cfg, inputs.device, inputs.start_seed, cached=execution == "grouped"
+        )
+    with timings.span("env_build"):
+        env_pre, env_post = make_env_pre_post_processors(env_cfg=env_cfg, policy_cfg=policy_cfg)
+        envs = make_env(env_cfg, n_envs=run.get("batch_size", 1), use_async_envs=False)
+    # timed, unchanged (each part exclusive of the parts inside it): scene compilation and rendering, the
+    # environments' resets and steps, the policy's actions, the rest of LeRobot's rollout loop
+    with (
+        timings.wrap(CompiledScene, "__init__", "scene_compile"),
+        timings.wrap(CompiledScene, "render_all", "render"),
+        timings.wrap(FactorWorldEnv, "reset", "env_reset"),
+        timings.wrap(FactorWorldEnv, "step", "env_step"),
+        timings.wrap(policy, "select_action", "policy"),
+        timings.span("rollout_other"),
+        torch.no_grad(),
+    ):
         info = eval_policy_all(
             envs,
             policy,
@@ -403,24 +544,69 @@ def _run_eval(step: Step, folder: Path, deps: list[Path]) -> dict[str, Any]:
             max_episodes_rendered=0,
             start_seed=inputs.start_seed,
         )
-    successes = [bool(s) for s in info["per_task"][0]["metrics"]["successes"]]
-    seeds = [inputs.start_seed + i for i in range(len(successes))]
-    cover = coverage(seeds, len(configs))
-    width = env_cfg.sampling.widths.get("object_pos")
-    result = {
-        "condition": inputs.condition,
-        "successes": successes,
-        "seeds": seeds,
-        "n_envs": len(configs),
-        "envs_visited": cover.visited,
-        "equal_visits": cover.equal,
-        "fingerprint": fingerprint(configs, width),
-        "checkpoint": checkpoint,
-    }
-    family = family_of(task)
-    if family.content_key:  # what every episode asked for (e.g. instruction, named object), for breakdowns
-        result[family.content_key] = family.episode_records(configs, seeds, width)
+    with timings.span("records"):
+        successes = [bool(s) for s in info["per_task"][0]["metrics"]["successes"]]
+        seeds = [inputs.start_seed + i for i in range(len(successes))]
+        cover = coverage(seeds, len(configs))
+        width = env_cfg.sampling.widths.get("object_pos")
+        result = {
+            "env_steps": timings.calls.get("env_step", 0),  # the cost model's unit (not a result)
+            "condition": inputs.condition,
+            "successes": successes,
+            "seeds": seeds,
+            "n_envs": len(configs),
+            "envs_visited": cover.visited,
+            "equal_visits": cover.equal,
+            "fingerprint": fingerprint(configs, width),
+            "checkpoint": checkpoint,
+        }
+        family = family_of(task)
+        if family.content_key:  # what every episode asked for (e.g. instruction, named object), for breakdowns
+            result[family.content_key] = family.episode_records(configs, seeds, width)
     return result
+
+
+# The policy loaded by the last evaluation of this (``grouped``) worker, with the RNG state right after
+# loading it: the next condition of the same checkpoint starts from exactly that state.
+_LOADED: dict[tuple, tuple] = {}
+
+
+def _load_policy(checkpoint: str, env_cfg, device: str, start_seed: int, cached: bool) -> tuple:
+    """(policy config, policy, preprocessor, postprocessor) of ``checkpoint``, seeded with ``start_seed`` before loading
+    as ``lerobot-eval`` does. ``cached``: reuse the one this process loaded last for the same checkpoint,
+    device and seed, with the RNG state restored to what it was right after loading (what a fresh load
+    would leave), so every condition computes what it computes on its own."""
+    # Deliberately here: LeRobot's policy stack (seconds to import), only in the process that evaluates.
+    from lerobot.configs.policies import PreTrainedConfig  # noqa: PLC0415
+    from lerobot.policies.factory import make_policy, make_pre_post_processors  # noqa: PLC0415
+    from lerobot.utils.import_utils import register_third_party_plugins  # noqa: PLC0415
+    from lerobot.utils.random_utils import get_rng_state, set_rng_state, set_seed  # noqa: PLC0415
+
+    key = (checkpoint, device, start_seed, _mtime(checkpoint))
+    if cached and key in _LOADED:
+        *loaded, state = _LOADED[key]
+        set_rng_state(state)
+        return tuple(loaded)
+    _LOADED.clear()
+    register_third_party_plugins()  # as lerobot-eval does: Factor World's env and policy types, and any other plugin
+    policy_cfg = PreTrainedConfig.from_pretrained(checkpoint)
+    policy_cfg.pretrained_path = Path(checkpoint)
+    policy_cfg.device = _eval_device(device)
+    set_seed(start_seed)
+    policy = make_policy(cfg=policy_cfg, env_cfg=env_cfg)
+    preprocessor, postprocessor = make_pre_post_processors(
+        policy_cfg=policy_cfg,
+        pretrained_path=checkpoint,
+        preprocessor_overrides={"device_processor": {"device": str(policy_cfg.device)}},
+    )
+    if cached:
+        _LOADED[key] = (policy_cfg, policy, preprocessor, postprocessor, get_rng_state())
+    return policy_cfg, policy, preprocessor, postprocessor
+
+
+def _mtime(path: str) -> int:
+    weights = Path(path) / "model.safetensors"
+    return weights.stat().st_mtime_ns if weights.is_file() else 0
 
 
 def _eval_device(device: str) -> str:

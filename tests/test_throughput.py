@@ -1,0 +1,117 @@
+"""Study throughput (issue 21): per-step timings, the profile, the cost model's fit, grouped execution, and
+``scripts/bench_study.py`` end to end at its smallest scale (both executions give identical results)."""
+
+from __future__ import annotations
+
+import json
+import os
+import re
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+from lerobot_factorworld.core.timing import Timings
+from lerobot_factorworld.study.config import StudyConfig
+from lerobot_factorworld.study.executors import task_units
+from lerobot_factorworld.study.plan import make_plan
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def _cfg(tmp_path: Path, **overrides) -> StudyConfig:
+    settings = {
+        "out_dir": str(tmp_path / "study"),
+        "tasks": ["door-open"],
+        "n_train_envs": [1, 2],
+        "train_factors": ["light", "table_texture"],
+        "factors": ["light", "table_texture"],
+        "methods": [{"name": "bc", "policy": {"type": "bc"}}],
+        "workers": 2,
+    }
+    settings.update(overrides)
+    return StudyConfig(**settings)
+
+
+def test_timed_parts_are_exclusive_and_wrapping_restores_the_attribute():
+    timings = Timings()
+
+    class Thing:
+        def work(self):
+            time.sleep(0.02)
+            return 7
+
+    thing = Thing()
+    with timings.span("outer"), timings.wrap(Thing, "work", "inner"):
+        time.sleep(0.02)
+        assert thing.work() == 7
+    assert Thing.work.__name__ == "work" and "work" not in vars(thing)
+    assert 0.015 < timings.seconds["inner"] < 0.1 and 0.015 < timings.seconds["outer"] < 0.1
+    assert timings.calls == {"inner": 1, "outer": 1}
+    with timings.wrap(thing, "work", "own"):
+        thing.work()
+    assert "work" not in vars(thing) and timings.calls["own"] == 1
+
+
+def test_grouped_tasks_hold_one_checkpoints_evaluations_and_split_for_idle_workers(tmp_path):
+    plan = make_plan(_cfg(tmp_path))
+    evals = plan.of_kind("eval")  # 2 checkpoints x 3 conditions
+    assert [len(u) for u in task_units(evals, 2, grouped=False)] == [1] * 6
+    units = task_units(evals, 2, grouped=True)
+    assert [len(u) for u in units] == [3, 3] and all(len({s.deps[0] for s in u}) == 1 for u in units)
+    assert sorted(len(u) for u in task_units(evals[:3], 2, grouped=True)) == [1, 2]
+    mixed = task_units([*evals[:3], *plan.of_kind("train")], 1, grouped=True)
+    assert [len(u) for u in mixed] == [3, 1, 1]
+
+
+def test_profile_and_cost_fit_read_the_steps_timings(tmp_path, monkeypatch):
+    from lerobot_factorworld.study import cost, profile
+    from lerobot_factorworld.study.steps import RESULT_FILE
+
+    cfg = _cfg(tmp_path)
+    plan = make_plan(cfg)
+    fake = {
+        "collect": {"frames": 100, "timings": {"imports": 4.0, "render": 2.0, "expert_physics": 3.0, "total": 10.0}},
+        "train": {"steps": 10, "timings": {"startup_save": 5.0, "data": 1.0, "update": 2.2, "total": 8.2}},
+        "eval": {"env_steps": 50, "timings": {"policy_load": 1.0, "env_step": 1.5, "render": 1.0, "total": 4.0}},
+    }
+    for step in plan.steps:
+        step.folder(cfg.out_dir).mkdir(parents=True)
+        (step.folder(cfg.out_dir) / RESULT_FILE).write_text(json.dumps(fake[step.kind]))
+    profile.record_run(cfg.out_dir, 40.0, 2, "grouped", {"collect": 2, "train": 2, "eval": 6})
+    rows = {(r.kind, r.component): r for r in profile.component_rows(plan, cfg.out_dir)}
+    assert rows["eval", "total"].count == 6 and rows["eval", "total"].seconds == 24.0
+    assert abs(rows["eval", "other"].seconds - 6 * 0.5) < 1e-9 and abs(rows["collect", "other"].mean - 1.0) < 1e-9
+    text = profile.profile_text(plan, cfg.out_dir)
+    assert "40.0 s wall with 2 worker(s)" in text and "policy_load" in text
+    assert profile.profile_markdown(plan, cfg.out_dir)[0] == "## Where the time went"
+
+    model = cost.fit_constants(plan, cfg.out_dir)
+    assert model["collect"]["frame_s"] == 0.05 and model["collect"]["fixed_s"] == 5.0
+    assert model["train"]["sample_s"]["bc"] == round(3.2 / (10 * cfg.train.batch_size), 6)
+    assert model["train"]["fixed_s"] == 5.0 and model["eval"]["sim_step_s"] == 0.05 and model["eval"]["fixed_s"] == 1.5
+    assert model["study_s"] >= 0
+    out = tmp_path / "cost_model.json"
+    monkeypatch.setattr(cost, "COST_MODEL_FILE", cost.COST_MODEL_FILE)  # the package's file stays untouched
+    text = cost.fit_cost_model(cfg, plan, cfg.out_dir, path=out)
+    written = json.loads(out.read_text())
+    assert written["fitted_on"]["wall_s"] == 40.0 and "estimated" in text
+    # the fitted constants are what the estimate uses (the fake results' frames are not the plan's demos)
+    whole = cost.estimate(plan, list(plan.steps), "grouped", written)
+    assert whole["one CPU machine (2 cores)"] * 3600 > written["study_s"]
+
+
+def test_bench_study_quick_runs_both_executions_with_identical_results():
+    env = {**os.environ, "MUJOCO_GL": os.environ.get("MUJOCO_GL", "egl")}
+    proc = subprocess.run(
+        [sys.executable, str(ROOT / "scripts" / "bench_study.py"), "--quick"],
+        capture_output=True,
+        text=True,
+        timeout=600,
+        env=env,
+        cwd=ROOT,
+    )
+    assert proc.returncode == 0, f"stdout:\n{proc.stdout}\nstderr:\n{proc.stderr[-4000:]}"
+    lines = proc.stdout.strip().splitlines()
+    assert any(line.startswith("identical results") for line in lines), proc.stdout
+    assert re.fullmatch(r"ratio: \d+\.\d+", lines[-1]), proc.stdout
