@@ -102,7 +102,7 @@ PLANS: dict[str, Plan] = {
     "r3m_rn50": Plan({"cpu": 3, "cuda": 50}, {"cpu": 6, "cuda": 100}),
     ACT: Plan({"cpu": 3, "cuda": 50}, {"cpu": 100, "cuda": 200}),
 }
-QUICK = dict(demos=2, rounds=1, train_steps=2, infer_calls=5, policies=("conv", ACT))
+QUICK = dict(demos=2, rounds=1, batch_size=2, train_steps=1, infer_calls=5, policies=("conv", ACT))
 
 
 @dataclass
@@ -355,13 +355,13 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     )
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--data", default=None, help="folder for the two datasets (kept and reused; default: temp)")
-    parser.add_argument("--quick", action="store_true", help="smoke run: 2 demos, conv and act, 1 round, 2 steps")
+    parser.add_argument("--quick", action="store_true", help="smoke run: 2 demos, conv, act, 1 round, batch 2, 1 step")
     args = parser.parse_args(argv)
 
     policies = _bench.parse_names(parser, args.policies, POLICIES, "policy(ies)")
     if args.quick:
         policies = list(QUICK["policies"])
-        args.demos, args.rounds = QUICK["demos"], QUICK["rounds"]
+        args.demos, args.rounds, args.batch_size = QUICK["demos"], QUICK["rounds"], QUICK["batch_size"]
     if "conv" not in policies or ACT not in policies:
         parser.error("--policies must include conv and act (the ratio compares them)")
     args.policy_list = policies

@@ -1,13 +1,28 @@
-"""Shared fixtures. Rendering is headless (the package defaults MUJOCO_GL to egl before MuJoCo loads)."""
+"""Shared fixtures and the suite's scheduling. Rendering is headless (the package defaults MUJOCO_GL to egl
+before MuJoCo loads).
 
+Under ``pytest -n auto`` (``make test``; pyproject.toml adds ``--dist loadgroup --no-loadscope-reorder``):
+
+* the expensive inputs (collected datasets, weight files) are built once per run by whichever worker asks first
+  and reused by every worker (:func:`shared`);
+* tests that change one shared folder in turn (the toy study) carry ``pytest.mark.xdist_group`` and run on
+  one worker;
+* the longest tests are started first (:data:`EXPECTED_SECONDS`), so both workers finish together.
+"""
+
+import functools
 import os
+import pickle
+import shutil
 import subprocess
 import sys
+from collections.abc import Callable
 from pathlib import Path
 
 os.environ.setdefault("MUJOCO_GL", "egl")
 
 import pytest  # noqa: E402
+from filelock import FileLock  # noqa: E402
 
 from lerobot_factorworld.envs.factor_env import FactorWorldEnv  # noqa: E402
 
@@ -44,3 +59,135 @@ def _run_tool(tool: str, *args: str, timeout: int = 900) -> subprocess.Completed
 def run_tool():
     """Run a venv console script (``lerobot-train``, ``lerobot-eval``) headless and assert it succeeded."""
     return _run_tool
+
+
+# --- expensive inputs, built once per run and shared by every xdist worker ---------------------------
+
+
+def shared(tmp_path_factory: pytest.TempPathFactory, name: str, build: Callable[[Path], object]):
+    """``build(folder)`` once per test run, by whichever (xdist) worker asks first; the others wait and reuse it.
+
+    ``folder`` is an empty folder that lives until the run ends; returns ``build``'s return value (pickled, so
+    every worker gets an equal copy). Use it only for inputs that the tests read and never change.
+    """
+    base = tmp_path_factory.getbasetemp()
+    if os.environ.get("PYTEST_XDIST_WORKER"):
+        base = base.parent  # the run's folder, above every worker's own
+    folder = base / "shared" / name
+    folder.parent.mkdir(parents=True, exist_ok=True)
+    result = folder.parent / f"{name}.pickle"
+    with FileLock(f"{folder}.lock"):
+        if not result.exists():
+            shutil.rmtree(folder, ignore_errors=True)
+            folder.mkdir()
+            value = build(folder)
+            partial = result.with_suffix(".partial")
+            partial.write_bytes(pickle.dumps(value))
+            partial.replace(result)
+        return pickle.loads(result.read_bytes())
+
+
+def _collect_pick_place_light(folder: Path) -> Path:
+    from lerobot_factorworld.datasets.collect import CollectConfig, collect  # LeRobot's dataset stack: slow tests only
+
+    root = folder / "pp"
+    collect(
+        CollectConfig(
+            task="pick-place",
+            n_envs=1,
+            demos_per_env=3,
+            factors=["light"],
+            root=str(root),
+            repo_id="local/pp",
+            workers=1,
+            use_videos=False,
+        )
+    )
+    return root
+
+
+@pytest.fixture(scope="session")
+def build_once(tmp_path_factory) -> Callable[[str, Callable[[Path], object]], object]:
+    """``build_once(name, build)``: :func:`shared` for this run."""
+    return functools.partial(shared, tmp_path_factory)
+
+
+@pytest.fixture(scope="session")
+def tiny_dataset(build_once) -> Path:
+    """3 pick-place demos in one environment under the light factor, image storage (repo id ``local/pp``):
+    what the policies' ``lerobot-train`` runs train on (bc, RT-1)."""
+    return build_once("pick_place_light", _collect_pick_place_light)
+
+
+# --- scheduling --------------------------------------------------------------------------------------
+
+# Seconds a test (or an xdist group, summed) took in a full run on 2 busy cores; a test not listed counts as
+# SLOW_DEFAULT when marked slow, else 0 (kept in file order after the listed ones). Only the order depends
+# on these numbers: update them when a test becomes one of the longest.
+EXPECTED_SECONDS = {
+    "toy_study": 200.0,  # the xdist group of tests/test_study.py's toy study (local, rerun, Ray)
+    "tests/test_bench_scripts.py::test_bench_script_quick_prints_ratio_last[bc]": 70.0,
+    "tests/test_bench_scripts.py::test_bench_script_quick_prints_ratio_last[collect]": 70.0,
+    "tests/test_throughput.py::test_bench_study_quick_runs_both_executions_with_identical_results": 60.0,
+    "tests/test_pick.py::test_rt1_trains_across_instructions_and_lerobot_eval_reports_every_condition": 50.0,
+    "tests/test_bc.py::test_lerobot_train_frozen_encoder_then_lerobot_eval_without_its_weights_file[r3m_rn50]": 45.0,
+    "tests/test_rt1.py::test_lerobot_train_lowers_the_loss_and_lerobot_eval_runs_the_checkpoint": 45.0,
+    "tests/test_pick.py::test_bc_trains_on_instructions_and_lerobot_eval_reports_held_out_phrasings": 40.0,
+    "tests/test_bc.py::test_lerobot_train_frozen_encoder_then_lerobot_eval_without_its_weights_file[clip_rn50]": 35.0,
+    "tests/test_datasets.py::test_killed_collection_resumes_without_duplicates": 25.0,
+    "tests/test_pick.py::test_expert_succeeds_in_default_scenes_and_under_physical_shifts": 18.0,
+    "tests/test_study.py::test_cli_dry_run_and_one_line_errors": 16.0,
+    "tests/test_bc.py::test_lerobot_train_conv_with_every_augmentation": 15.0,
+    "tests/test_bc.py::test_lerobot_train_frozen_encoder_then_lerobot_eval_without_its_weights_file[lite0]": 15.0,
+    "tests/test_datasets.py::test_lerobot_train_runs_on_the_collected_dataset": 14.0,
+    "tests/test_lerobot.py::test_lerobot_eval_runs_a_lerobot_policy_on_factorworld": 14.0,
+    "tests/test_pick.py::test_held_out_objects_and_phrasings_never_appear_in_training_environments": 14.0,
+    "tests/test_compat.py::test_dataset_sidecars_are_byte_identical": 11.0,
+    "tests/test_datasets.py::test_full_disk_keeps_finished_shards_and_a_rerun_completes": 11.0,
+    "tests/test_bench_scripts.py::test_bench_script_quick_prints_ratio_last[policy]": 10.0,
+    "tests/test_bench_scripts.py::test_bench_script_quick_prints_ratio_last[env]": 9.0,
+    "tests/test_bc.py::test_checkpoint_reloads_after_its_weights_file_is_deleted": 8.0,
+    "tests/test_experts.py::test_expert_solves_default_and_each_physical_shift": 6.0,
+    "tests/test_lerobot.py::test_lerobot_eval_fails_on_a_bad_env_setting_before_building_a_policy": 9.0,
+    "tests/test_study.py::test_episodes_visit_every_environment_equally_and_pair_object_starts": 8.0,
+    "tests/test_datasets.py::test_offline_push_fails_clearly_and_loses_nothing": 8.0,
+    "tests/test_datasets.py::test_several_tasks_in_one_video_dataset_and_append": 8.0,
+}
+SLOW_DEFAULT = 10.0
+
+
+def _group(item: pytest.Item) -> str | None:
+    mark = item.get_closest_marker("xdist_group")
+    return None if mark is None else (mark.args[0] if mark.args else mark.kwargs["name"])
+
+
+def _expected_seconds(item: pytest.Item) -> float:
+    group = _group(item)
+    if group is not None:
+        return EXPECTED_SECONDS.get(group, SLOW_DEFAULT)
+    nodeid = item.nodeid
+    seconds = EXPECTED_SECONDS.get(nodeid, EXPECTED_SECONDS.get(nodeid.split("[")[0]))
+    if seconds is None:
+        return SLOW_DEFAULT if item.get_closest_marker("slow") else 0.0
+    return seconds
+
+
+def pytest_collection_modifyitems(config, items):
+    """Longest first (an xdist group's tests together, at the group's place): with 2 workers handed one test
+    (or group) at a time, the long ones run side by side at the start and short ones fill in at the end.
+    Expensive fixtures are session-scoped (:func:`shared`), so this order builds none of them twice."""
+    units: dict[str, tuple[int, float]] = {}
+    keys = {}
+    for index, item in enumerate(items):
+        group = _group(item)
+        unit = f"group:{group}" if group is not None else item.nodeid
+        first, seconds = units.setdefault(unit, (index, _expected_seconds(item)))
+        keys[item.nodeid] = (-seconds, first)
+    items.sort(key=lambda item: keys[item.nodeid])
+    if config.getoption("loadgroup", False):  # an xdist worker under --dist loadgroup
+        for item in items:
+            group = _group(item)
+            if group is not None and "@" not in item.nodeid and hasattr(item, "_id"):
+                # pytest-xdist (3.8) tags a grouped test by appending "@group" to ``item._nodeid``, which pytest 9
+                # no longer reads: without this, tests of one group would be spread over workers.
+                item._id = type(item._id).parse(f"{item.nodeid}@{group}")

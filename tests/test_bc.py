@@ -69,13 +69,17 @@ def write_open_clip_rn50(path: Path, seed: int = 0) -> dict:
     return {k[len("visual.") :]: v for k, v in state.items() if k.startswith("visual.")}
 
 
-@pytest.fixture(scope="module")
-def weights(tmp_path_factory) -> dict[str, tuple[Path, dict]]:
-    root = tmp_path_factory.mktemp("bc_weights")
+def _write_weight_files(root: Path) -> dict[str, tuple[Path, dict]]:
     return {
         "r3m_rn50": (root / "model.pt", write_r3m_model_pt(root / "model.pt")),
         "clip_rn50": (root / "open_clip_pytorch_model.bin", write_open_clip_rn50(root / "open_clip_pytorch_model.bin")),
     }
+
+
+@pytest.fixture(scope="session")
+def weights(build_once) -> dict[str, tuple[Path, dict]]:
+    """Both weight files, written once per run (every xdist worker reads the same; tests change copies only)."""
+    return build_once("bc_weights", _write_weight_files)
 
 
 # --- architecture ----------------------------------------------------------------------------------
@@ -300,26 +304,6 @@ def test_instruction_embedding_can_condition_the_head():
 # --- real lerobot-train / lerobot-eval -------------------------------------------------------------
 
 
-@pytest.fixture(scope="module")
-def tiny_dataset(tmp_path_factory):
-    from lerobot_factorworld.datasets.collect import CollectConfig, collect  # LeRobot's dataset stack: slow tests only
-
-    root = tmp_path_factory.mktemp("bcdata") / "pp"
-    collect(
-        CollectConfig(
-            task="pick-place",
-            n_envs=1,
-            demos_per_env=3,
-            factors=["light"],
-            root=str(root),
-            repo_id="local/bc_pp",
-            workers=1,
-            use_videos=False,
-        )
-    )
-    return root
-
-
 def lerobot(command: str, *args: str, timeout: int = 600) -> subprocess.CompletedProcess:
     proc = subprocess.run(
         [str(Path(sys.executable).parent / command), *args], capture_output=True, text=True, timeout=timeout
@@ -334,7 +318,7 @@ def train(dataset: Path, out: Path, steps: int, *policy_args: str) -> list[float
         "--policy.type=bc",
         "--policy.device=cpu",
         "--policy.push_to_hub=false",
-        "--dataset.repo_id=local/bc_pp",
+        "--dataset.repo_id=local/pp",  # tiny_dataset (conftest.py)
         f"--dataset.root={dataset}",
         f"--steps={steps}",
         "--batch_size=8",

@@ -34,11 +34,15 @@ def tiny(root: Path, **overrides) -> CollectConfig:
     return CollectConfig(**{**settings, **overrides})
 
 
-@pytest.fixture(scope="module")
-def dataset(tmp_path_factory):
-    root = tmp_path_factory.mktemp("collect") / "tiny"
-    report = collect(tiny(root))
-    return root, report
+def _collect_tiny(folder: Path):
+    root = folder / "tiny"
+    return root, collect(tiny(root))
+
+
+@pytest.fixture(scope="session")
+def dataset(build_once):
+    """Collected once per run and read by every xdist worker: a test that writes into it works on a copy."""
+    return build_once("datasets_tiny", _collect_tiny)
 
 
 def test_dataset_loads_offline_with_lerobot(dataset):
@@ -135,8 +139,11 @@ def test_shards_from_several_machines_merge_keeping_factors(tmp_path):
     ]
 
 
-def test_offline_push_fails_clearly_and_loses_nothing(dataset):
-    root, _ = dataset
+def test_offline_push_fails_clearly_and_loses_nothing(dataset, tmp_path):
+    import shutil
+
+    root = tmp_path / "tiny"
+    shutil.copytree(dataset[0], root)  # the push writes the dataset card into it
     code = (
         "from lerobot_factorworld.datasets.hub import push_dataset, HubUnreachableError\n"
         f"try:\n    push_dataset({str(root)!r}, 'someone/factorworld_tiny')\n"

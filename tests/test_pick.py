@@ -342,9 +342,8 @@ def test_evaluated_episodes_records_are_recovered_from_their_seeds_and_broken_do
     assert set(by_instruction) == {r["instruction"] for r in records} and sum(map(len, by_instruction.values())) == 8
 
 
-@pytest.fixture(scope="module")
-def pick_dataset(tmp_path_factory):
-    root = tmp_path_factory.mktemp("pick") / "data"
+def _collect_pick(folder: Path):
+    root = folder / "data"
     cfg = CollectConfig(
         task=TASK,
         factors=["light"],
@@ -358,6 +357,12 @@ def pick_dataset(tmp_path_factory):
         use_videos=False,
     )
     return root, collect(cfg)
+
+
+@pytest.fixture(scope="session")
+def pick_dataset(build_once):
+    """4 pick demos (2 environments, light), collected once per run and read by every xdist worker."""
+    return build_once("pick_data", _collect_pick)
 
 
 def test_dataset_records_instruction_target_and_object_set_per_episode(pick_dataset):
@@ -414,7 +419,12 @@ def test_rt1_trains_across_instructions_and_lerobot_eval_reports_every_condition
     info = json.loads((tmp_path / "eval" / "eval_info.json").read_text())
     assert set(info["per_group"]) == {"train", *conditions}
     assert all("pc_success" in group for group in info["per_group"].values())
-    # The simulation CNN policy trains on it too, conditioned on the instruction's embedding.
+
+
+@pytest.mark.slow
+def test_bc_trains_on_instructions_and_lerobot_eval_reports_held_out_phrasings(pick_dataset, tmp_path, run_tool):
+    """The simulation CNN policy trains on the pick dataset too, conditioned on the instruction's embedding."""
+    root, _ = pick_dataset
     run_tool(
         "lerobot-train",
         "--policy.type=bc",

@@ -196,26 +196,6 @@ def test_lite0_backbone_loads_the_packaged_imagenet_weights_offline():
     assert int(logits.argmax()) == 698
 
 
-@pytest.fixture(scope="module")
-def tiny_dataset(tmp_path_factory):
-    from lerobot_factorworld.datasets.collect import CollectConfig, collect  # LeRobot's dataset stack: slow tests only
-
-    root = tmp_path_factory.mktemp("rt1data") / "pp"
-    collect(
-        CollectConfig(
-            task="pick-place",
-            n_envs=1,
-            demos_per_env=3,
-            factors=["light"],
-            root=str(root),
-            repo_id="local/pp",
-            workers=1,
-            use_videos=False,
-        )
-    )
-    return root
-
-
 @pytest.mark.slow
 def test_lerobot_train_lowers_the_loss_and_lerobot_eval_runs_the_checkpoint(tiny_dataset, tmp_path):
     bin_dir = Path(sys.executable).parent
@@ -227,7 +207,7 @@ def test_lerobot_train_lowers_the_loss_and_lerobot_eval_runs_the_checkpoint(tiny
             "--policy.device=cpu",
             "--policy.push_to_hub=false",
             "--dataset.repo_id=local/pp",
-            f"--dataset.root={tiny_dataset}",
+            f"--dataset.root={tiny_dataset}",  # conftest.py
             "--steps=40",
             "--batch_size=4",
             "--num_workers=0",

@@ -257,6 +257,10 @@ def _toy_config(out: Path, executor: str = "local"):
     return parse_config(StudyConfig, [f"--config_path={path}"], "study"), path
 
 
+# The tests that use (and, resuming, change) the toy study's folder run on one xdist worker, one after the other.
+TOY_GROUP = pytest.mark.xdist_group("toy_study")
+
+
 @pytest.fixture(scope="module")
 def toy(tmp_path_factory):
     from lerobot_factorworld.study.runner import run_study
@@ -267,6 +271,7 @@ def toy(tmp_path_factory):
     return cfg, outcome
 
 
+@TOY_GROUP
 @pytest.mark.slow
 def test_toy_study_end_to_end(toy):
     import csv
@@ -294,6 +299,7 @@ def test_toy_study_end_to_end(toy):
         assert f"]({plot.name})" in report
 
 
+@TOY_GROUP
 @pytest.mark.slow
 def test_rerun_does_no_new_work_and_interrupted_study_resumes(toy):
     from lerobot_factorworld.study.plan import make_plan
@@ -330,6 +336,7 @@ def test_changing_one_setting_changes_only_the_steps_that_depend_on_it(tmp_path)
     assert changed["collect"] == keys["collect"] and not changed["train"] & keys["train"]
 
 
+@TOY_GROUP
 @pytest.mark.slow
 def test_dataset_gives_the_training_condition_and_mismatches_are_refused(toy):
     from lerobot_factorworld.adapters.env_config import FactorWorldEnvConfig
@@ -357,6 +364,7 @@ def test_dataset_gives_the_training_condition_and_mismatches_are_refused(toy):
         FactorWorldEnvConfig(task="handle-press", dataset_root=str(ROOT))
 
 
+@TOY_GROUP
 @pytest.mark.slow
 def test_the_same_plan_on_a_local_ray_instance_gives_the_same_results(toy, tmp_path):
     pytest.importorskip("ray")
