@@ -67,6 +67,16 @@ def parse_names(parser: argparse.ArgumentParser, text: str, valid: Sequence[str]
     return names
 
 
+def check_tasks(parser: argparse.ArgumentParser, tasks: str | Sequence[str]) -> None:
+    """``parser.error`` naming the valid tasks when any of ``tasks`` is not a Factor World task."""
+    from lerobot_factorworld.tasks import TASKS  # after add_repo_to_path(): the package may not be importable before
+
+    names = [tasks] if isinstance(tasks, str) else list(tasks)
+    unknown = [task for task in names if task not in TASKS]
+    if unknown:
+        parser.error(f"unknown task(s) {', '.join(unknown)}; valid: {', '.join(TASKS)}")
+
+
 def print_table(header: str, rows: Iterable[str]) -> None:
     """A markdown table: ``header`` (``| a | b |``), a rule as wide as each of its cells, then ``rows``."""
     print(header)

@@ -72,7 +72,6 @@ from lerobot_factorworld.policies.bc.backbones import (  # noqa: E402
     r3m_resnet50,
 )
 from lerobot_factorworld.policies.bc.configuration_bc import BCConfig  # noqa: E402
-from lerobot_factorworld.tasks import TASKS  # noqa: E402
 
 TARGET_RATIO = 5.0
 BC_ENCODERS = ("conv", "lite0", "clip_rn50", "r3m_rn50")
@@ -375,8 +374,7 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
         or min(args.num_workers, args.train_steps, args.infer_calls) < 0
     ):
         parser.error("--demos, --batch-size and --rounds must be >= 1; --num-workers and step counts >= 0")
-    if args.task not in TASKS:
-        parser.error(f"unknown task {args.task}; valid: {', '.join(TASKS)}")
+    _bench.check_tasks(parser, args.task)
     return args
 
 

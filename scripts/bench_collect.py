@@ -238,10 +238,7 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
         args.demos, args.rounds = 2, 1
     if args.demos < 1 or args.rounds < 1:
         parser.error("--demos and --rounds must be at least 1")
-    from lerobot_factorworld.tasks import TASKS
-
-    if args.task not in TASKS:
-        parser.error(f"unknown task {args.task}; valid: {', '.join(TASKS)}")
+    _bench.check_tasks(parser, args.task)
     return args
 
 

@@ -215,11 +215,7 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
         args.steps, args.rounds = 30, 1
     if args.steps < 1 or args.rounds < 1:
         parser.error("--steps and --rounds must be at least 1")
-    from lerobot_factorworld.tasks import TASKS
-
-    unknown = [task for task in args.task if task not in TASKS]
-    if unknown:
-        parser.error(f"unknown task(s) {', '.join(unknown)}; valid: {', '.join(TASKS)}")
+    _bench.check_tasks(parser, args.task)
     return args
 
 

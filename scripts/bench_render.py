@@ -170,11 +170,7 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
         args.task, args.size, args.rounds, args.reps = ["pick-place"], [84], 1, 1
     if args.rounds < 1 or args.reps < 1:
         parser.error("--rounds and --reps must be at least 1")
-    from lerobot_factorworld.tasks import TASKS
-
-    unknown = [task for task in args.task if task not in TASKS]
-    if unknown:
-        parser.error(f"unknown task(s) {', '.join(unknown)}; valid: {', '.join(TASKS)}")
+    _bench.check_tasks(parser, args.task)
     return args
 
 
