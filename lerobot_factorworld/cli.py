@@ -9,6 +9,7 @@ Commands:
     collect         scripted demos -> LeRobotDataset with per-episode factor values (resumable)
     rt1-presets     the RT-1 presets and their parameter counts
     study           the generalization-gap study: collect, train, evaluate, report (--config=FILE.yaml, --dry-run)
+    report          regenerate a study's report.md and plots from its results.csv alone (--results=CSV)
 
 Every command reads its settings with :func:`lerobot_factorworld.core.settings.parse_config` (draccus +
 the config's ``__post_init__`` validation), so a bad setting ends in one ``error: ...`` line naming the
@@ -23,8 +24,8 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 
 from .contact_sheet import ContactSheetConfig, render_contact_sheet
-from .core.checks import check_at_least, check_output_file, check_seed
-from .core.settings import SettingError, one_line, parse_config
+from .core.checks import check_at_least, check_folder_target, check_input_file, check_output_file, check_seed
+from .core.settings import CONFIG_PATH_FLAG, SettingError, one_line, parse_config
 from .core.splits import check_split
 from .factors.registry import FACTORS, PAPER_STUDY_FACTORS, check_factors, support_matrix_markdown
 from .factors.values import save_configs
@@ -168,6 +169,55 @@ def _study_alias(arg: str) -> str:
     return STUDY_FLAG_ALIASES.get(arg, arg)
 
 
+@dataclass
+class ReportConfig:
+    """``factorworld report``: a study's ``report.md`` and plots regenerated from its ``results.csv`` (nothing
+    is run, no step folder is read).
+
+    Attributes:
+        results: The study's ``results.csv``.
+        config: The study's config YAML (also ``--config_path``); default: ``config.yaml`` next to ``results``.
+        out: Folder to write ``report.md`` and the plots into, with copies of ``results.csv``, the config (as
+            ``config.yaml``) and the task families' CSV files; default: the folder of ``results``.
+    """
+
+    results: str = ""
+    config: str = ""
+    out: str = ""
+
+    def __post_init__(self) -> None:
+        if not self.results:
+            raise ValueError("factorworld report needs --results=PATH/results.csv")
+        check_input_file(self.results, "results")
+        if self.config:
+            check_input_file(self.config, "config_path")
+        if self.out:
+            check_folder_target(self.out, "out")
+
+
+def cmd_report(args: list[str]) -> None:
+    # the study's config checks its policies with LeRobot (~4 s): only when this command runs
+    from .study.report import regenerate_report  # noqa: PLC0415
+
+    cfg = parse_config(ReportConfig, _report_args(args), "report")
+    report, plots = regenerate_report(cfg.results, cfg.config or None, cfg.out or None)
+    print(f"wrote {report} and {len(plots)} plot(s)")
+
+
+def _report_args(args: list[str]) -> list[str]:
+    """``--config_path`` names the study's config here, not settings of the command (draccus's meaning)."""
+    out, i = [], 0
+    while i < len(args):
+        name, sep, value = args[i].partition("=")
+        if name == CONFIG_PATH_FLAG and not sep and i + 1 < len(args):
+            out.append(f"--config={args[i + 1]}")
+            i += 2
+            continue
+        out.append(f"--config={value}" if name == CONFIG_PATH_FLAG else args[i])
+        i += 1
+    return out
+
+
 COMMANDS: dict[str, Callable[[list[str]], None]] = {
     "tasks": cmd_tasks,
     "factors": cmd_factors,
@@ -177,6 +227,7 @@ COMMANDS: dict[str, Callable[[list[str]], None]] = {
     "collect": cmd_collect,
     "rt1-presets": cmd_rt1_presets,
     "study": cmd_study,
+    "report": cmd_report,
 }
 
 

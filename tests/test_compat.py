@@ -1,12 +1,15 @@
 """Files other tools and later runs read stay byte-identical across refactors: saved configurations
 (``factorworld sample``, evaluation suites), dataset side-cars (``meta/factorworld.json``) and study step
-keys (what a cached step is found by). The expected bytes in tests/data/compat were written by the code
-before the package was layered (commit e638860); see that folder's README before regenerating them."""
+keys (what a cached step is found by). The expected bytes in tests/data/compat were first written by the
+code before the package was layered (commit e638860) and are regenerated only by a change meant to alter
+them: ``FACTORWORLD_WRITE_COMPAT=1`` makes these tests write the files instead of comparing (see that
+folder's README for the command and the record of each regeneration)."""
 
 from __future__ import annotations
 
 import hashlib
 import json
+import os
 from pathlib import Path
 
 import pytest
@@ -21,6 +24,15 @@ from lerobot_factorworld.study.plan import make_plan
 
 GOLDEN = Path(__file__).parent / "data" / "compat"
 REPO = Path(__file__).resolve().parents[1]
+WRITE = os.environ.get("FACTORWORLD_WRITE_COMPAT") == "1"
+
+
+def _golden(name: str, actual: bytes) -> bytes:
+    """The expected bytes of golden file ``name``; with ``FACTORWORLD_WRITE_COMPAT=1``, ``actual`` written there first."""
+    if WRITE:
+        (GOLDEN / name).write_bytes(actual)
+    return (GOLDEN / name).read_bytes()
+
 
 SAMPLES = {
     "sample_door-open_train.json": ["--task=door-open", "--n=4", "--seed=3"],
@@ -48,7 +60,7 @@ def test_sampled_configurations_are_byte_identical(name, tmp_path, capsys):
     out = tmp_path / name
     factorworld(["sample", *SAMPLES[name], f"--out={out}"])
     capsys.readouterr()
-    assert out.read_bytes() == (GOLDEN / name).read_bytes()
+    assert out.read_bytes() == _golden(name, out.read_bytes())
 
 
 @pytest.mark.parametrize("task", list(SUITES))
@@ -58,7 +70,7 @@ def test_evaluation_suites_are_byte_identical(task, tmp_path):
     assert list(suites) == ["train", *SUITES[task]]
     for condition, configs in suites.items():
         path = save_configs(configs, tmp_path / f"suite_{task}_{condition}.json")
-        assert path.read_bytes() == (GOLDEN / path.name).read_bytes(), condition
+        assert path.read_bytes() == _golden(path.name, path.read_bytes()), condition
 
 
 @pytest.mark.slow
@@ -80,19 +92,25 @@ def test_dataset_sidecars_are_byte_identical(name, tmp_path):
         "collect",
     )
     collect(cfg)
-    assert (root / "meta" / "factorworld.json").read_bytes() == (GOLDEN / name).read_bytes()
+    sidecar = (root / "meta" / "factorworld.json").read_bytes()
+    assert sidecar == _golden(name, sidecar)
 
 
 def test_study_step_keys_and_inputs_are_unchanged(monkeypatch):
     monkeypatch.chdir(REPO)
-    expected_keys = json.loads((GOLDEN / "study_keys.json").read_text())
+    expected_keys = json.loads((GOLDEN / "study_keys.json").read_text())  # the configs checked, and their form
     expected_inputs = json.loads((GOLDEN / "study_inputs.json").read_text())
+    actual_keys, actual_inputs = {}, {}
     for name, expected in expected_keys.items():
         plan = make_plan(parse_config(StudyConfig, [f"--config_path=configs/study/{name}.yaml"], "study"))
         keys = [f"{s.kind} {s.key}" for s in plan.steps]
         if isinstance(expected, dict):  # a large plan: its key list by count and digest
             keys = {"n": len(keys), "sha256": hashlib.sha256("\n".join(keys).encode()).hexdigest()}
-        assert keys == expected, name
+        actual_keys[name] = keys
         if name in expected_inputs:
             inputs = [{"kind": s.kind, "key": s.key, "inputs": s.inputs} for s in plan.steps]
-            assert json.loads(json.dumps(inputs, sort_keys=True, default=str)) == expected_inputs[name], name
+            actual_inputs[name] = json.loads(json.dumps(inputs, sort_keys=True, default=str))
+    for file, actual in (("study_keys.json", actual_keys), ("study_inputs.json", actual_inputs)):
+        expected = json.loads(_golden(file, json.dumps(actual, indent=1, sort_keys=True).encode()))
+        for name in expected:
+            assert actual[name] == expected[name], (file, name)

@@ -335,7 +335,7 @@ def test_data_of_another_version_is_never_appended_to_or_resumed(dataset, tmp_pa
 
     source, _ = dataset
     settings = json.loads((source / "meta" / "factorworld.json").read_text())["settings"]
-    assert settings[DATA_VERSION_KEY] == DATA_VERSION == 2
+    assert settings[DATA_VERSION_KEY] == DATA_VERSION == 3
     old = tmp_path / "old"
     shutil.copytree(source, old)
     sidecar = json.loads((old / "meta" / "factorworld.json").read_text())
@@ -357,7 +357,7 @@ def test_data_of_another_version_is_never_appended_to_or_resumed(dataset, tmp_pa
     for mode in ("append", "new"):
         code, err = cli_refusal([*same, f"--root={old}", f"--mode={mode}"], capsys)
         assert code == 1 and f"{old} holds data version 1 (observation.state in the table's frame" in err, err
-        assert "writes data version 2 (observation.state in the robot's frame" in err and "--mode=overwrite" in err
+        assert "writes data version 3 (observation.state in the robot's frame" in err and "--mode=overwrite" in err
     assert before == {p: p.stat().st_mtime_ns for p in old.rglob("*") if p.is_file()}
     assert not staging_dir(old).exists()
 

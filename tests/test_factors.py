@@ -114,8 +114,9 @@ def test_train_and_eval_draw_from_disjoint_asset_splits():
     tests = shift_configs(train, ("table_texture", "object_shape"), 20, seed=1)
     train_tex, eval_tex = set(split_names("texture", "train")), set(split_names("texture", "eval"))
     assert not train_tex & eval_tex
-    assert {c.factors.table_texture for c in train} <= train_tex
-    assert {c.factors.table_texture for c in tests} <= eval_tex
+    seen, shifted = _images(c.factors.table_texture for c in train), _images(c.factors.table_texture for c in tests)
+    assert seen and shifted  # the default share draws images and flat colours (tests/test_rgb_textures.py)
+    assert seen <= train_tex and shifted <= eval_tex
     assert {c.factors.object_shape for c in tests} <= set(split_names("shape", "eval"))
     # a shifted environment keeps every other factor of its training environment
     assert all(t.factors.distractors == train[j % 20].factors.distractors for j, t in enumerate(tests))
@@ -148,21 +149,35 @@ def _families(names) -> set[str]:
     return {asset_family(n) for n in names}
 
 
+def _images(names) -> set[str]:
+    """The image textures among texture values (the others are flat ``rgb:`` colours, which no split holds)."""
+    return {n for n in names if not n.startswith("rgb:")}
+
+
+IMAGES_ONLY = SamplingOptions(rgb_fraction=0.0)
+"""Image textures only: for the tests of the asset splits and of the rules between image textures."""
+
+
 def test_default_sampling_and_shifts_hold_whole_families_out():
     assert SamplingOptions().asset_split == "family"
     train = sample_configs("pick-place", 20, seed=0, factors=("table_texture", "object_shape"))
     tests = shift_configs(train, ("table_texture", "object_shape"), 40, seed=1)
     for factor, kind in (("table_texture", "texture"), ("object_shape", "shape")):
-        seen, shifted = [getattr(c.factors, factor) for c in train], [getattr(c.factors, factor) for c in tests]
+        seen, shifted = (
+            _images(getattr(c.factors, factor) for c in train),
+            _images(getattr(c.factors, factor) for c in tests),
+        )
         assert set(seen) <= set(split_names(kind, "train", mode="family"))
         assert set(shifted) <= set(split_names(kind, "eval", mode="family"))
         assert not _families(shifted) & _families(split_names(kind, "train"))  # unseen kinds, not new variants
     # the per-variant split stays selectable, also as a flag (draccus: --sampling.asset_split=variant)
     variant = draccus.parse(SamplingOptions, args=["--asset_split=variant"])
     assert variant == SamplingOptions(asset_split="variant")
-    redrawn = shift_configs(train, "table_texture", 40, seed=1, options=variant)
-    assert {c.factors.table_texture for c in redrawn} <= set(split_names("texture", "eval", mode="variant"))
-    assert _families(c.factors.table_texture for c in redrawn) & _families(split_names("texture", "train"))
+    redrawn = _images(
+        c.factors.table_texture for c in shift_configs(train, "table_texture", 40, seed=1, options=variant)
+    )
+    assert redrawn <= set(split_names("texture", "eval", mode="variant"))
+    assert _families(redrawn) & _families(split_names("texture", "train"))
 
 
 def _flat_texture_folder(root: Path, n: int = 4) -> tuple[tuple[str, ...], tuple[str, ...]]:
@@ -177,7 +192,7 @@ def _flat_texture_folder(root: Path, n: int = 4) -> tuple[tuple[str, ...], tuple
 def test_object_texture_never_equals_table_texture(tmp_path, monkeypatch):
     folder = tmp_path / "textures"
     train, evals = _flat_texture_folder(folder)
-    options = SamplingOptions(texture_folder=str(folder))
+    options = SamplingOptions(texture_folder=str(folder), rgb_fraction=0.0)
     both = sample_configs("door-open", 30, seed=3, factors=("object_texture", "table_texture"), options=options)
     tables = [c.factors.table_texture for c in both]
     objects_alone = [
@@ -265,14 +280,14 @@ def test_sampled_table_texture_avoids_the_fixture_objects_own_textures(monkeypat
     assert door == ("metaworld:textures/metal1.png", "metaworld:textures/metal2.png")
     pool = (*door, "metaworld:textures/wood1.png", "proc:marble-000")
     monkeypatch.setattr(sampling, "asset_split_names", lambda kind, split, folder=None, mode="family": pool)
-    tables = [c.factors.table_texture for c in sample_configs("door-open", 40, seed=0, factors=("table_texture",))]
-    assert set(tables) == set(pool) - set(door)  # drawn alone, half of them would be the door's metal
+    drawn = sample_configs("door-open", 40, seed=0, factors=("table_texture",), options=IMAGES_ONLY)
+    assert {c.factors.table_texture for c in drawn} == set(pool) - set(door)  # alone: half would be the door's metal
     both = sample_configs("door-open", 40, seed=0, factors=("object_texture", "table_texture"))
     assert all(c.factors.table_texture != c.factors.object_texture for c in both)
     # a repainted door frees its metal for the table, which then avoids the door's new texture
     repainted = [SceneConfig("door-open", FactorValues(object_texture="proc:marble-000"))]
-    shifted = [c.factors.table_texture for c in shift_configs(repainted, "table_texture", 40, seed=0, split="train")]
-    assert set(shifted) == set(pool) - {"proc:marble-000"}
+    shifted = shift_configs(repainted, "table_texture", 40, seed=0, split="train", options=IMAGES_ONLY)
+    assert {c.factors.table_texture for c in shifted} == set(pool) - {"proc:marble-000"}
     # a configuration written by hand is taken as given (the rules are sampling rules, docs/factors.md)
     same = SceneConfig("door-open", FactorValues(object_texture=door[0], table_texture=door[0]))
     assert same.factors.object_texture == same.factors.table_texture
@@ -306,7 +321,7 @@ def test_sample_command_takes_sampling_options(tmp_path, capsys):
     cli.main([*args, "--sampling.asset_split=variant"])
     variant = SamplingOptions(asset_split="variant")
     assert load_configs(out) == sample_configs("door-open", 20, 0, "train", ("table_texture",), variant)
-    tables = {c.factors.table_texture for c in load_configs(out)}
+    tables = _images(c.factors.table_texture for c in load_configs(out))
     assert tables <= set(split_names("texture", "train", mode="variant"))
     assert _families(tables) & _families(split_names("texture", "eval"))  # kinds the family split holds out
     capsys.readouterr()

@@ -292,7 +292,9 @@ def test_same_seeds_give_the_same_layouts_and_pixels_and_objects_show_their_colo
 
 
 def test_object_texture_keeps_each_objects_colour(make_env):
-    config = sample_configs(TASK, 1, seed=0, split="eval", factors=("object_texture",))[0]
+    config = sample_configs(
+        TASK, 1, seed=0, split="eval", factors=("object_texture",), options=SamplingOptions(rgb_fraction=0.0)
+    )[0]
     env = make_env(TASK, config, cameras=())
     env.reset(seed=0)
     m = env.model

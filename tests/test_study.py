@@ -132,7 +132,11 @@ def test_a_pick_study_report_sets_success_next_to_the_papers_real_robot_table():
         for seed in (0, 1)
     ]
     text = "\n".join(_real_robot_section(cfg, rows))
-    assert "| original (`train`) | 91.7% | 17/20 | 0.85 [0.64, 0.95] |" in text
+    # seeds pooled with the seed-level bootstrap: 17/20 is 9/10 and 8/10; a resample of seed 0 twice whose
+    # episodes are redrawn succeeds 20 times in more than 2.5% of resamples, so the upper end is 1.00 (Wilson's
+    # 0.95 treated the 20 episodes as one sample); the lower end stays the Wilson interval's 0.64 it must contain
+    assert "| original (`train`) | 91.7% | 17/20 | 0.85 [0.64, 1.00] |" in text
+    assert "seed-level bootstrap" in text and "seeds pooled" in text
     assert "| held-out objects (`held_out_objects`) | — | 1/20 |" in text
     # light 0.75 > table texture 0.45 > camera 0.25, as in the paper (83.3 > 52.8 > 45.8)
     assert "**+1.00**" in text and "easiest first here: light, table_texture, camera_pos" in text
@@ -320,6 +324,26 @@ def test_rerun_does_no_new_work_and_interrupted_study_resumes(toy):
     resumed = run_study(cfg, command="resume")
     assert resumed.ran == {"collect": 0, "train": 0, "eval": 2}
     assert resumed.results.read_text() == before  # same rows, none duplicated
+
+
+@TOY_GROUP
+@pytest.mark.slow
+def test_the_report_regenerated_from_results_csv_alone_is_the_studys_own(toy, tmp_path):
+    from lerobot_factorworld.study.report import NO_TIMINGS, regenerate_report
+
+    cfg, outcome = toy
+    config = Path(cfg.out_dir).with_suffix(".yaml")  # the toy's config file (_toy_config)
+    report, plots = regenerate_report(outcome.results, config, tmp_path)
+    live, again = outcome.report.read_text(), report.read_text()
+    assert "\nNumbers made at commit(s): " in live and "## Where the time went" in live
+    # one renderer: the same text from the commit line on, but for the header's command and the run's timings
+    assert (
+        live.split("\n## Where the time went")[0].rstrip("\n").split("\n")[3:]
+        == again.split(NO_TIMINGS)[0].rstrip("\n").split("\n")[3:]
+    )
+    assert [p.name for p in plots] == [p.name for p in outcome.plots]
+    assert (tmp_path / "results.csv").read_bytes() == outcome.results.read_bytes()
+    assert (tmp_path / "config.yaml").read_text() == config.read_text()
 
 
 def test_changing_one_setting_changes_only_the_steps_that_depend_on_it(tmp_path):

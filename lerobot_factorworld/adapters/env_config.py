@@ -72,8 +72,10 @@ class FactorWorldEnvConfig(EnvConfig):
         include_train: Also evaluate on the training environments (needed for the generalization gap).
         configs_path: JSON file of training configurations (``factorworld sample`` writes one) to use
             instead of sampling them.
-        sampling: How factor values are drawn (``--env.sampling.widths='{camera_pos: wide}'``, ...);
-            ``widths.object_pos`` (narrow / medium) is also the range of the per-episode object start.
+        sampling: How factor values are drawn (``--env.sampling.widths='{camera_pos: wide}'``,
+            ``--env.sampling.rgb_fraction=0.5``: the share of flat-colour textures, ...); ``widths.object_pos``
+            (narrow / medium) is also the range of the per-episode object start. With ``dataset_root`` they are
+            the dataset's: sampling settings given (other than the defaults) must agree with them.
     """
 
     task: str = "pick-place"

@@ -93,7 +93,8 @@ class CollectConfig:
         push_to_hub: Push with LeRobot's mechanism (card, tags) when done; a Hub ``repo_id`` (not
             ``local/...``) and a Hugging Face token are checked before collecting.
         private: Push as a private dataset (only with ``push_to_hub``).
-        sampling: How factor values are drawn (``--sampling.n_distractors=2``, ``--sampling.texture_folder=...``).
+        sampling: How factor values are drawn (``--sampling.n_distractors=2``, ``--sampling.texture_folder=...``,
+            ``--sampling.rgb_fraction=0.5``: the share of textures that are flat RGB colours); recorded with the data.
     """
 
     task: str = "pick-place"

@@ -9,11 +9,14 @@ from __future__ import annotations
 
 from typing import Any
 
-DATA_VERSION = 2
+DATA_VERSION = 3
 DATA_VERSIONS = {
     1: "observation.state in the table's frame, Meta-World's pick-place goal, per-variant asset split",
     2: "observation.state in the robot's frame, the public Factor World pick-place goal on the table, "
     "asset_split recorded with the sampling settings",
+    3: "observation.state in the robot's frame, the public Factor World pick-place goal on the table, "
+    "textures a flat RGB colour with probability sampling.rgb_fraction (default 0.5, was 0), flat-colour "
+    "object and distractor textures drawn in their colour (were white)",
 }
 DATA_VERSION_KEY = "data_version"  # in the settings of meta/factorworld.json and of a staged plan.json
 

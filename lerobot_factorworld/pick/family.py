@@ -19,7 +19,7 @@ from .episode import PickScene
 from .expert import PickExpert
 from .layout import PickLayout, default_layout, episode_record, workspace_keepout
 from .records import episode_records
-from .report import report_sections
+from .report import BREAKDOWN_FILE, report_sections, write_report_files
 from .sampling import CONDITIONS, check_condition, language_shift, sample_layouts
 
 
@@ -30,6 +30,7 @@ class PickFamily(TaskFamily):
     content_key = "pick"
     sampling_options = ("n_objects",)
     conditions = CONDITIONS
+    report_files = (BREAKDOWN_FILE,)
     n_objects = (MIN_OBJECTS, DEFAULT_OBJECTS, MAX_OBJECTS)
     """Objects per pick scene: fewest, default, most (``--sampling.n_objects``)."""
 
@@ -107,10 +108,11 @@ class PickFamily(TaskFamily):
     ) -> list[dict]:
         return episode_records(configs, seeds, object_pos_width)
 
-    def report_sections(
-        self, cfg: Any, rows: Sequence[dict], evaluations: Sequence[Any], study_dir: Any, part: str
-    ) -> list[str]:
-        return report_sections(cfg, rows, evaluations, study_dir, part)
+    def write_report_files(self, cfg: Any, evaluations: Sequence[Any], study_dir: Any) -> list[Any]:
+        return write_report_files(cfg, evaluations, study_dir)
+
+    def report_sections(self, cfg: Any, rows: Sequence[dict], study_dir: Any, part: str) -> list[str]:
+        return report_sections(cfg, rows, study_dir, part)
 
 
 PICK_FAMILY = PickFamily()

@@ -2,13 +2,13 @@
 real-robot table, and success per named object, shape and phrasing.
 
 Every number comes from a CSV file next to ``report.md``: the real-robot table from the study's
-``results.csv`` rows, the breakdowns from ``pick_breakdowns.csv``, which is written once from the
-evaluations' episode records (:mod:`.records`) and read back to draw the tables.
+``results.csv`` rows, the breakdowns from ``pick_breakdowns.csv``, which a study that ran writes from the
+evaluations' episode records (:mod:`.records`, :func:`write_report_files`) and every report reads back, so a
+report regenerated from the committed CSV files (``factorworld report``) has the same tables.
 """
 
 from __future__ import annotations
 
-import csv
 import math
 from collections.abc import Sequence
 from pathlib import Path
@@ -16,11 +16,12 @@ from typing import Any
 
 from ..core.io import atomic_write_text
 from ..protocol.conditions import TRAIN_SUITE
-from ..study.aggregate import main_grid
+from ..study.aggregate import main_grid, pooled_success
 from ..study.config import StudyConfig
-from ..study.markdown import FAMILY_DETAILS, FAMILY_RESULTS
-from ..study.metrics import spearman, wilson_interval
+from ..study.markdown import FAMILY_DETAILS, FAMILY_RESULTS, ci
+from ..study.metrics import spearman
 from ..study.paper import PAPER_REAL_ROBOT
+from ..study.report import read_table
 from ..study.results import Evaluation, csv_text
 from ..tasks import get_task
 from .records import BY, breakdown
@@ -31,68 +32,78 @@ BREAKDOWN_COLUMNS = ("method", "task", "n_train_envs", "seed", "condition", "by"
 MARKDOWN_BY = ("target", "shape", "template")  # instructions are many: in the CSV only
 
 
-def report_sections(
-    cfg: StudyConfig, rows: Sequence[dict], evaluations: Sequence[Evaluation], study_dir: str | Path, part: str
-) -> list[str]:
-    """The pick sections of ``report.md`` at ``part`` (the study's ``FAMILY_RESULTS`` or ``FAMILY_DETAILS``)."""
+def write_report_files(cfg: StudyConfig, evaluations: Sequence[Evaluation], study_dir: str | Path) -> list[Path]:
+    """``pick_breakdowns.csv`` from the finished evaluations' episode records (the family's ``report_files``)."""
+    path = write_breakdowns(evaluations, study_dir)
+    return [path] if path else []
+
+
+def report_sections(cfg: StudyConfig, rows: Sequence[dict], study_dir: str | Path, part: str) -> list[str]:
+    """The pick sections of ``report.md`` at ``part`` (the study's ``FAMILY_RESULTS`` or ``FAMILY_DETAILS``),
+    from ``rows`` and the ``pick_breakdowns.csv`` in ``study_dir`` (none: no breakdown section)."""
     if part == FAMILY_RESULTS:
         return real_robot_section(cfg, rows)
     if part == FAMILY_DETAILS:
-        path = write_breakdowns(evaluations, study_dir)
-        return breakdown_section(read_breakdowns(path)) if path else []
+        path = Path(study_dir) / BREAKDOWN_FILE
+        return breakdown_section(read_breakdowns(path)) if path.is_file() else []
     raise ValueError(f"unknown report part {part!r}; valid: {FAMILY_RESULTS}, {FAMILY_DETAILS}")
 
 
 # --- next to the paper's real-robot table ---------------------------------------------------------
 
 
-def pooled_success(rows: Sequence[dict], method: str, condition: str) -> tuple[int, int]:
-    """(successes, episodes) of ``method`` in ``condition`` over the pick family's rows of the main grid,
-    pooled over tasks, N and seeds."""
-    cell = [r for r in main_grid(rows) if _is_pick(r["task"]) and r["method"] == method and r["condition"] == condition]
-    return sum(r["successes"] for r in cell), sum(r["episodes"] for r in cell)
-
-
 def real_robot_section(cfg: StudyConfig, rows: Sequence[dict]) -> list[str]:
-    """The pick family's rows next to the paper's real-robot table (success pooled over N and seeds)."""
-    if not any(_is_pick(r["task"]) for r in main_grid(rows)):
+    """The pick family's rows next to the paper's real-robot table: success per method and condition,
+    pooled over the family's tasks, N and training seeds, with an interval that accounts for the seeds."""
+    pick = [r for r in main_grid(rows) if _is_pick(r["task"])]
+    if not pick:
         return []
+    pooled = pooled_success(pick, ["method", "condition"])
+    seeds = len({r["seed"] for r in pick})
     lines = [
         "## Pick next to the paper's real-robot table",
         "",
-        "Success pooled over tasks of the pick family, N and seeds (Wilson 95% interval); the paper's numbers are "
-        "RT-1 on a real robot, 12 trials per factor (section 5.1).",
+        f"Success pooled over tasks of the pick family, N and the {seeds} training seed(s); the 95% interval is the "
+        "seed-level bootstrap's (training seeds resampled, then episodes within each seed's cells), widened where "
+        "needed to contain the Wilson interval of the pooled episodes (with one seed: the Wilson interval). The "
+        "paper's numbers are RT-1 on a real robot, 12 trials per factor (section 5.1).",
         "",
-        "| method | condition | paper (real robot) | successes | success rate [Wilson 95%] |",
+        "| method | condition | paper (real robot) | successes | success rate [95%, seeds pooled: bootstrap] |",
         "|---|---|---|---|---|",
     ]
     for method in cfg.methods:
         rates = {}
         for condition in [TRAIN_SUITE, *cfg.conditions()]:
-            k, n = pooled_success(rows, method.name, condition)
-            if not n:
+            cell = pooled.get((method.name, condition))
+            if cell is None:
                 continue
-            low, high = wilson_interval(k, n)
+            k, n, low, high = cell
             name, paper = PAPER_REAL_ROBOT.get(condition, (condition, None))
             rates[condition] = k / n
             lines.append(
                 f"| {method.name} | {name} (`{condition}`) | {'—' if paper is None else f'{paper:.1f}%'} | {k}/{n} | "
-                f"{k / n:.2f} [{low:.2f}, {high:.2f}] |"
+                f"{k / n:.2f} {ci(low, high, digits=2, sign=False)} |"
             )
-        shifted = [c for c in rates if c != TRAIN_SUITE and PAPER_REAL_ROBOT.get(c, ("", None))[1] is not None]
-        rho = spearman({c: rates[c] for c in shifted}, {c: PAPER_REAL_ROBOT[c][1] for c in shifted})
-        if not math.isnan(rho):
-            lines += [
-                "",
-                f"{method.name}: Spearman correlation of the {len(shifted)} shifted conditions' success rates with the "
-                f"paper's real-robot ones: **{rho:+.2f}** (easiest first here: "
-                + ", ".join(sorted(shifted, key=lambda c: -rates[c]))
-                + "; in the paper: "
-                + ", ".join(sorted(shifted, key=lambda c: -PAPER_REAL_ROBOT[c][1]))
-                + ").",
-            ]
+        lines += _ordering_lines(method.name, rates)
         lines.append("")
     return lines
+
+
+def _ordering_lines(method: str, rates: dict[str, float]) -> list[str]:
+    """Spearman's rho of the shifted conditions' success rates with the paper's real-robot ones."""
+    shifted = [c for c in rates if c != TRAIN_SUITE and PAPER_REAL_ROBOT.get(c, ("", None))[1] is not None]
+    rho = spearman({c: rates[c] for c in shifted}, {c: PAPER_REAL_ROBOT[c][1] for c in shifted})
+    if math.isnan(rho):
+        return []
+    return [
+        "",
+        f"{method}: Spearman correlation of the {len(shifted)} shifted conditions' success rates with the "
+        f"paper's real-robot ones: **{rho:+.2f}** (easiest first here: "
+        + ", ".join(sorted(shifted, key=lambda c: -rates[c]))
+        + "; in the paper: "
+        + ", ".join(sorted(shifted, key=lambda c: -PAPER_REAL_ROBOT[c][1]))
+        + ").",
+    ]
 
 
 def _is_pick(task: str) -> bool:
@@ -136,9 +147,8 @@ def write_breakdowns(evaluations: Sequence[Evaluation], study_dir: str | Path) -
 
 
 def read_breakdowns(path: str | Path) -> list[dict[str, Any]]:
-    """The rows of a ``pick_breakdowns.csv`` (counts as integers)."""
-    with open(path, newline="") as f:
-        return [{**r, "episodes": int(r["episodes"]), "successes": int(r["successes"])} for r in csv.DictReader(f)]
+    """The rows of a ``pick_breakdowns.csv`` (counts as integers); a file that is not one is refused in one line."""
+    return read_table(path, BREAKDOWN_COLUMNS, integers=("n_train_envs", "seed", "episodes", "successes"))
 
 
 def breakdown_section(rows: Sequence[dict]) -> list[str]:

@@ -15,6 +15,7 @@ import mujoco
 import numpy as np
 
 from ..assets import load_texture
+from ..factors.registry import parse_rgb
 from ..scene.build import TABLE_CENTER, TEXTURE_SIZE
 from .catalog import get_object
 from .layout import PlacedObject
@@ -25,6 +26,7 @@ MASS = 0.25  # kg per object
 # The puck's contact settings (stiff, high friction): what Meta-World's grasps are tuned to.
 CONTACT = {"solimp": [0.99, 0.99, 0.01, 0.5, 2.0], "solref": [0.01, 1.0], "friction": [1.0, 0.1, 0.002], "condim": 4}
 TINT_FLOOR = 0.5  # darkest share of the object's colour under a textured pattern
+LUMA = np.array([0.299, 0.587, 0.114])  # luminance weights of an RGB colour
 
 
 def body_name(name: str) -> str:
@@ -68,8 +70,12 @@ def _add_object(spec: mujoco.MjSpec, item: PlacedObject, texture: str | None) ->
 
 
 def _tinted_texture(spec: mujoco.MjSpec, material, value: str, rgb: tuple[float, float, float]) -> None:
+    if value.startswith("rgb:"):  # a flat colour shades the object's own colour by its luminance, as a pattern does
+        luminance = float(np.dot(parse_rgb(value), LUMA))
+        material.rgba = [*(float(c) * (TINT_FLOOR + (1.0 - TINT_FLOOR) * luminance) for c in rgb), 1.0]
+        return
     image = load_texture(value, TEXTURE_SIZE).astype(np.float64) / 255.0
-    luminance = image @ np.array([0.299, 0.587, 0.114])
+    luminance = image @ LUMA
     shade = TINT_FLOOR + (1.0 - TINT_FLOOR) * luminance
     tinted = np.clip(shade[..., None] * np.asarray(rgb) * 255.0, 0, 255).astype(np.uint8)
     faces = np.ascontiguousarray(np.concatenate([tinted] * 6, axis=0))  # a cube texture: six faces stacked

@@ -47,6 +47,13 @@ from . import keepout
 
 MAX_PLACEMENT_TRIES = 2000
 
+DEFAULT_RGB_FRACTION = 0.5
+"""Share of texture draws (object, table, floor, distractor textures) that are a flat colour drawn
+uniformly in [0, 1]^3 instead of an image. The paper samples textures "from 162 texture images (81 for
+train, 81 for eval) and continuous RGB values in [0, 1]^3" without giving the share, and the public code
+samples images only; one half, the two sources on an equal footing, is this project's reading
+(docs/factors.md, "Textures: images and flat colours")."""
+
 
 @dataclass(frozen=True)
 class SamplingOptions:
@@ -56,7 +63,9 @@ class SamplingOptions:
         widths: Range width per continuous factor (e.g. ``{"camera_pos": "wide"}``); others use their default.
         texture_folder: A folder of texture images to draw textures from instead of the built-in pool.
         shape_folder: A folder of meshes (.stl/.obj) to draw object shapes and distractors from.
-        rgb_fraction: Probability that a texture draw is a flat RGB colour instead of an image.
+        rgb_fraction: Probability that a texture draw is a flat RGB colour (uniform in [0, 1]^3) instead
+            of an image (default :data:`DEFAULT_RGB_FRACTION`). Colours, like images, come from the
+            factor's stream of the split, so held-out (eval) colours are other draws than training ones.
         n_distractors: Number of distractor objects per environment.
         n_objects: Objects on the table in a scene of a family that reads it (its ``sampling_options``;
             checked by the family); other tasks ignore it.
@@ -69,7 +78,7 @@ class SamplingOptions:
     widths: dict[str, str] = field(default_factory=dict)
     texture_folder: str | None = None
     shape_folder: str | None = None
-    rgb_fraction: float = 0.0
+    rgb_fraction: float = DEFAULT_RGB_FRACTION
     n_distractors: int = 1
     asset_split: str = DEFAULT_ASSET_SPLIT
     n_objects: int = 4

@@ -123,7 +123,7 @@ def build_spec(
         material = _add_material(spec, "fw_object", factors.object_texture, cube=True)
         for geom in _visible_geoms(spec, task.object_bodies):
             geom.material = material
-            geom.rgba = [1.0, 1.0, 1.0, 1.0]  # geom rgba tints textures (the upstream red-puck bug)
+            geom.rgba = _geom_rgba(factors.object_texture)  # not the task's own tint (the upstream red-puck bug)
     for i, item in enumerate(factors.distractors or ()):
         _add_scene_object(spec, f"fw_distractor{i}", item)
     _set_render_quality(spec, quality, image_size)
@@ -208,6 +208,13 @@ def _paint(spec: mujoco.MjSpec, material, value: str, cube: bool) -> None:
         material.rgba = [1.0, 1.0, 1.0, 1.0]
         textures[role] = _add_texture(spec, f"{material.name}_tex", value, cube)
     material.textures = textures
+
+
+def _geom_rgba(value: str) -> list[float]:
+    """The colour of a geom painted with texture ``value``: MuJoCo draws a geom whose rgba is not its default
+    in that rgba, not in its material's, so white under an image (the texture's own colours) and the colour
+    itself for a flat ``rgb:`` one."""
+    return [*parse_rgb(value), 1.0] if value.startswith("rgb:") else [1.0, 1.0, 1.0, 1.0]
 
 
 def _retexture_material(spec: mujoco.MjSpec, material_name: str, value: str, cube: bool) -> None:
@@ -310,7 +317,7 @@ def _add_scene_object(spec: mujoco.MjSpec, name: str, item: SceneObject) -> None
         type=mujoco.mjtGeom.mjGEOM_MESH,
         meshname=f"{name}_mesh",
         material=material,
-        rgba=[1.0, 1.0, 1.0, 1.0],
+        rgba=_geom_rgba(item.texture),
         contype=1,
         conaffinity=1,
         condim=3,

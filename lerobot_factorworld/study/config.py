@@ -164,6 +164,9 @@ class CollectSettings:
         object_pos_width: Range of the per-episode object start (``narrow`` / ``medium``), for
             collection and evaluation alike.
         n_distractors: Distractor objects per environment.
+        rgb_fraction: Share of texture draws (object, table, floor, distractors) that are a flat RGB colour
+            instead of an image, for collection and evaluation alike (``None``: the sampling default,
+            ``SamplingOptions.rgb_fraction``, the paper's images and colours as docs/factors.md reads it).
         n_objects: Objects on the table per scene, for the task families that read it (their
             ``sampling_options``; ``None``: the sampling default); refused for other tasks.
         workers: Worker processes of one collection.
@@ -178,8 +181,21 @@ class CollectSettings:
     max_episode_steps: int | None = None
     object_pos_width: str = "narrow"
     n_distractors: int = 1
+    rgb_fraction: float | None = None
     n_objects: int | None = None
     workers: int = 1
+
+    def __post_init__(self) -> None:
+        if self.rgb_fraction is not None:
+            try:
+                SamplingOptions(rgb_fraction=self.rgb_fraction)
+            except ValueError as err:  # "rgb_fraction must be in [0, 1], got 2.0"
+                raise ValueError(f"collect.{err}") from None
+
+    @property
+    def effective_rgb_fraction(self) -> float:
+        """``rgb_fraction`` as set, or the sampling default."""
+        return SamplingOptions().rgb_fraction if self.rgb_fraction is None else float(self.rgb_fraction)
 
     def demos_for(self, task: str) -> int:
         return int(self.demos_per_task.get(task, self.demos))
@@ -274,6 +290,10 @@ class StudyConfig:
         profile: Run nothing; print where the finished steps' time went (per kind and component).
         fit_cost: Run nothing; refit the ``--dry-run`` cost model's constants from the finished steps'
             timings and write them to ``study/cost_model.json``.
+        strict: Refuse to run (one ``error:`` line, before any work) when cached steps of the plan were
+            made by other code than the current (another source hash; see ``core/provenance.py``).
+        rerun_stale: Redo the cached steps made by other code, and every cached step that depends on one
+            (its inputs are remade); their old folders are kept as ``steps/<kind>/<key>.stale-<commit>``.
     """
 
     name: str = "study"
@@ -297,6 +317,8 @@ class StudyConfig:
     dry_run: bool = False
     profile: bool = False
     fit_cost: bool = False
+    strict: bool = False
+    rerun_stale: bool = False
 
     def __post_init__(self) -> None:
         self.methods = [m if isinstance(m, MethodConfig) else MethodConfig(**m) for m in self.methods]
@@ -358,6 +380,8 @@ class StudyConfig:
             raise ValueError(f"unknown execution {self.execution!r}; valid: {', '.join(EXECUTIONS)}")
         if self.workers < 1:
             raise ValueError(f"workers must be at least 1, got {self.workers}")
+        if self.strict and self.rerun_stale:
+            raise ValueError("strict=true refuses steps made by other code, rerun_stale=true redoes them: set one")
         if min(self.n_train_envs) < 1 or len(set(self.n_train_envs)) != len(self.n_train_envs):
             raise ValueError(f"n_train_envs must be distinct positive numbers, got {self.n_train_envs}")
         if len(set(self.seeds)) != len(self.seeds):

@@ -26,11 +26,11 @@ from __future__ import annotations
 import datetime
 import heapq
 import json
-import subprocess
 from collections import deque
 from pathlib import Path
 from typing import Any
 
+from ..core import provenance
 from ..core.io import atomic_write_json
 from ..tasks import get_task
 from .config import StudyConfig
@@ -319,16 +319,6 @@ def fit_constants(plan: Plan, study_dir: str | Path) -> dict[str, Any]:
     return model
 
 
-def _commit() -> str:
-    try:
-        out = subprocess.run(
-            ["git", "rev-parse", "--short", "HEAD"], capture_output=True, text=True, cwd=Path(__file__).parent
-        )
-        return out.stdout.strip() or "unknown"
-    except OSError:
-        return "unknown"
-
-
 def fit_cost_model(cfg: StudyConfig, plan: Plan, study_dir: str | Path, path: Path = COST_MODEL_FILE) -> str:
     """Refit the constants from study ``cfg``'s finished steps, write them to ``path`` with where they were
     fitted, and return what changed and the model's estimate of the whole study next to its wall time."""
@@ -338,7 +328,7 @@ def fit_cost_model(cfg: StudyConfig, plan: Plan, study_dir: str | Path, path: Pa
     model["fitted_on"] = {
         "study": cfg.name,
         "out_dir": str(cfg.out_dir),
-        "commit": _commit(),
+        "commit": provenance.current().revision(short=True),
         "date": datetime.date.today().isoformat(),
         "execution": run.get("execution", cfg.execution),
         "workers": run.get("workers", cfg.workers),

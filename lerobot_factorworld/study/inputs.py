@@ -14,6 +14,7 @@ from dataclasses import dataclass, field, fields
 from typing import Any, ClassVar
 
 from ..protocol.conditions import TRAIN_SUITE
+from ..protocol.sampling import SamplingOptions
 
 
 def _from_dict(cls, data: Mapping[str, Any], extra: str | None = None):
@@ -47,6 +48,7 @@ class CollectInputs:
     action_noise: float
     max_episode_steps: int | None
     n_distractors: int
+    rgb_fraction: float  # share of texture draws that are flat RGB colours (the evaluation reads it from the data)
     widths: Mapping[str, str]  # object_pos width and the run's radius widths
     data_version: int
     versions: Mapping[str, str]
@@ -62,6 +64,16 @@ class CollectInputs:
     def from_dict(cls, data: Mapping[str, Any]) -> CollectInputs:
         out = _from_dict(cls, data, extra="family_options")
         return _replace_seq(out, "train_factors")
+
+    def sampling_options(self) -> SamplingOptions:
+        """How the collection draws its environments; its dataset records them, and the evaluation of every
+        checkpoint trained on it reads them from there (its ``train`` and shifted conditions alike)."""
+        return SamplingOptions(
+            widths=dict(self.widths),
+            n_distractors=self.n_distractors,
+            rgb_fraction=self.rgb_fraction,
+            **dict(self.family_options),
+        )
 
 
 @dataclass(frozen=True)

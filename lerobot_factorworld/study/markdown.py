@@ -5,10 +5,11 @@ of ``aggregate.py`` (the plots draw the same selectors). Task families add their
 from __future__ import annotations
 
 import math
-from collections import defaultdict
-from collections.abc import Callable
+from collections import Counter, defaultdict
+from collections.abc import Callable, Sequence
 from pathlib import Path
 
+from ..core.provenance import UNKNOWN
 from ..protocol.conditions import TRAIN_SUITE
 from .aggregate import (
     RADIUS_STEP_M,
@@ -35,9 +36,8 @@ from .paper import (
     PAPER_PAIR_TOLERANCE,
     PAPER_PAIRS_WITHIN,
 )
-from .plan import Plan
 from .plots import CAPTIONS, PLOTS
-from .results import RESULTS_FILE
+from .results import RESULTS_FILE, commits_of
 
 REPORT_FILE = "report.md"
 FAMILY_RESULTS = "results"  # a family's sections after the factor ordering (e.g. next to the paper's table)
@@ -74,26 +74,27 @@ BOOTSTRAP_NOTE = (
 
 def render(
     cfg: StudyConfig,
-    plan: Plan,
     rows: list[dict],
     plots: list[Path],
     command: str,
+    planned: int,
     family_sections: Callable[[str], list[str]] = lambda part: [],
 ) -> str:
-    """The text of ``report.md``; ``family_sections(part)`` gives the task families' own sections
-    (``part``: ``FAMILY_RESULTS`` after the factor ordering, ``FAMILY_DETAILS`` at the end)."""
-    details = family_sections(FAMILY_DETAILS)  # written first: they name the CSV files they read
+    """The text of ``report.md`` from the rows of ``results.csv`` (``planned``: the plan's evaluations);
+    ``family_sections(part)`` gives the task families' own sections (``part``: ``FAMILY_RESULTS`` after the
+    factor ordering, ``FAMILY_DETAILS`` at the end)."""
+    details = family_sections(FAMILY_DETAILS)
     ev = cfg.eval
     training = f"{cfg.train.epochs:g} epochs" if cfg.train.epochs else f"{cfg.train.steps} steps"
     done = len({r["step"] for r in rows})
-    total = len(plan.of_kind("eval"))
     lines = [
         f"# Study `{cfg.name}`",
         "",
-        f"Produced by `{command}` ({done} of {total} evaluations finished). Every number below comes from "
+        f"Produced by `{command}` ({done} of {planned} evaluations finished). Every number below comes from "
         f"`{RESULTS_FILE}` next to this file"
         + ("; the breakdowns at the end from the CSV files they name, also next to it." if details else "."),
         "",
+        *([commit_line(rows), ""] if rows else []),
         f"- Grid: methods {', '.join(m.name for m in cfg.methods)}; tasks {', '.join(cfg.tasks)}; "
         f"N {cfg.n_train_envs}; seeds {cfg.seeds}; {cfg.collect.demos} demos per dataset"
         + (f" (per task: {cfg.collect.demos_per_task})" if cfg.collect.demos_per_task else "")
@@ -132,6 +133,16 @@ def render(
     if missing:
         lines += [f"Not drawn (no data for them in this study): {', '.join(missing)}.", ""]
     return "\n".join(lines) + "\n" + "\n".join(details)
+
+
+def commit_line(rows: Sequence[dict]) -> str:
+    """``Numbers made at commit(s): 826fe54 (6 rows), commit not recorded (2 rows)``, in row order (the
+    ``commit`` column through ``results.commits_of``; a CSV made before it was recorded has none)."""
+    counts = Counter(commits_of([row])[0] for row in rows)
+    return "Numbers made at commit(s): " + ", ".join(
+        f"{'commit not recorded' if commit == UNKNOWN else commit} ({n} row{'s' if n != 1 else ''})"
+        for commit, n in counts.items()
+    )
 
 
 def _ordering_section(cfg: StudyConfig, rows: list[dict]) -> list[str]:

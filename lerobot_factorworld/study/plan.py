@@ -72,6 +72,7 @@ def _collect_step(cfg: StudyConfig, task: str, n: int, seed: int, widths: dict[s
         action_noise=c.action_noise,
         max_episode_steps=c.max_episode_steps,
         n_distractors=c.n_distractors,
+        rgb_fraction=c.effective_rgb_fraction,
         widths={"object_pos": c.object_pos_width, **widths},
         data_version=DATA_VERSION,
         versions=versions(),

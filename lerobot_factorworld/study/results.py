@@ -1,6 +1,8 @@
 """``results.csv``: one row per method x task x N x widths x condition x seed, built from the finished
 evaluation steps. Everything else the report shows (tables, plots) is derived from these rows, so a rerun
-or a resumed study rewrites the same file (no duplicated rows)."""
+or a resumed study rewrites the same file (no duplicated rows). Each row names the code that made its
+evaluation (``commit``, ``source_hash``, from the step's recorded provenance): the same at one commit, so
+two runs of the same code still write the same file."""
 
 from __future__ import annotations
 
@@ -13,11 +15,12 @@ from pathlib import Path
 from typing import Any
 
 from ..core.io import atomic_write_text
+from ..core.provenance import DIRTY, SHORT, SHORT_HASH, UNKNOWN
 from ..protocol.conditions import PAIR_SEPARATOR, TRAIN_SUITE
 from .config import RADIUS_FACTORS, StudyConfig
 from .metrics import paired_gap, wilson_interval
 from .plan import Plan, radius_of
-from .steps import Step, is_done, read_result
+from .steps import Step, is_done, provenance_of, read_result
 
 RESULTS_FILE = "results.csv"
 RESULT_COLUMNS = (
@@ -44,6 +47,8 @@ RESULT_COLUMNS = (
     "envs_visited",  # environments the episodes visited (all, equally, unless flagged in report.md)
     "fingerprint",  # hash of the condition's environments (configurations and object-start width)
     "step",  # key of the eval step (steps/eval/<key>/)
+    "commit",  # git commit the evaluation ran at, "-dirty" when the tree differed from it; empty: not recorded
+    "source_hash",  # first 12 hex digits of the SHA-256 of the package's source it ran (core/provenance.py)
 )
 
 
@@ -110,7 +115,31 @@ def _row(study: str, policies: dict[str, str], evaluation: Evaluation, train: di
         "envs_visited": res["envs_visited"],
         "fingerprint": res["fingerprint"],
         "step": evaluation.step.key,
+        **_provenance_columns(res),
     }
+
+
+def _provenance_columns(result: dict[str, Any]) -> dict[str, str]:
+    """``commit`` and ``source_hash`` of an evaluation's result; empty for one made before they were recorded."""
+    made_by = provenance_of(result)
+    if made_by is None:
+        return {"commit": "", "source_hash": ""}
+    commit = "" if made_by.commit is None else made_by.revision()
+    return {"commit": commit, "source_hash": made_by.source_hash[:SHORT_HASH]}
+
+
+def commits_of(rows: Sequence[dict], short: bool = True) -> list[str]:
+    """The commit(s) behind ``rows`` (``results.csv`` rows), each once, in row order: ``826fe54``, or
+    ``826fe54-dirty`` for code with uncommitted changes, ``unknown`` for rows that name no commit (made
+    before commits were recorded, or outside a git checkout). ``short``: 7 characters, as ``git log --oneline``."""
+    return list(dict.fromkeys(_short(row.get("commit") or UNKNOWN, short) for row in rows))
+
+
+def _short(revision: str, short: bool) -> str:
+    if not short or revision == UNKNOWN:
+        return revision
+    commit = revision.removesuffix(DIRTY)
+    return commit[:SHORT] + revision[len(commit) :]
 
 
 def csv_text(rows: Sequence[dict], columns: Sequence[str]) -> str:

@@ -3,6 +3,8 @@ a time, on the chosen executor, with progress bars), then write ``results.csv``,
 
 A failed step is reported and its dependents are skipped; every other step still runs, so a rerun
 only redoes what failed. One run of a study folder at a time (a lock file guards it).
+
+Cached steps made by other code are named, refused or redone first (``stale.py``).
 """
 
 from __future__ import annotations
@@ -24,6 +26,7 @@ from .executors import make_executor, task_units
 from .plan import Plan, make_plan
 from .profile import profile_text, record_run
 from .report import write_report
+from .stale import check_not_stale, rerun_stale, stale_steps, warn_stale
 from .steps import KINDS, Step, is_done
 
 LOCK_FILE = ".lock"
@@ -38,6 +41,8 @@ class StudyOutcome:
     cached: dict[str, int] = field(default_factory=dict)
     failed: dict[str, str] = field(default_factory=dict)  # step label -> error
     skipped: int = 0  # steps not run because a step they depend on failed
+    stale: int = 0  # cached steps made by other code (found before running)
+    set_aside: list[Path] = field(default_factory=list)  # old folders of the steps redone (rerun_stale)
     results: Path | None = None
     report: Path | None = None
     plots: list[Path] = field(default_factory=list)
@@ -45,11 +50,15 @@ class StudyOutcome:
 
 def run_study(cfg: StudyConfig, command: str | None = None) -> StudyOutcome | str:
     """Run (or resume) ``cfg``; with ``dry_run``, ``profile`` or ``fit_cost`` return the plan's description,
-    where the finished steps' time went, or what the refitted cost model found, instead (nothing runs)."""
+    where the finished steps' time went, or what the refitted cost model found, instead (nothing runs).
+
+    Cached steps made by other code are named on stderr first (``dry_run`` too), refused under ``strict``,
+    redone under ``rerun_stale`` (see the module docstring)."""
     start = time.perf_counter()
     plan = make_plan(cfg)
     study_dir = Path(cfg.out_dir)
     if cfg.dry_run:
+        warn_stale(cfg, plan, study_dir, stale_steps(plan, study_dir))
         return describe(cfg, plan)
     if cfg.profile:
         return profile_text(plan, study_dir)
@@ -59,11 +68,16 @@ def run_study(cfg: StudyConfig, command: str | None = None) -> StudyOutcome | st
     study_dir.mkdir(parents=True, exist_ok=True)
     command = command or "factorworld study " + " ".join(shlex.quote(a) for a in sys.argv[2:])
     with _lock(study_dir):
+        stale = stale_steps(plan, study_dir)  # under the lock: no other run changes them meanwhile
+        check_not_stale(cfg, stale)  # strict: before any work
+        warn_stale(cfg, plan, study_dir, stale)
+        set_aside = rerun_stale(plan, study_dir, stale) if cfg.rerun_stale else []
         atomic_write_json(study_dir / CONFIG_FILE, asdict(cfg), indent=1, sort_keys=True, default=str)
         atomic_write_json(
             study_dir / PLAN_FILE, [s.to_dict() for s in plan.steps], indent=1, sort_keys=True, default=str
         )
         outcome = _execute(cfg, plan, study_dir)
+        outcome.stale, outcome.set_aside = len(stale), set_aside
         if any(outcome.ran.values()):  # before the report, which states it
             record_run(study_dir, time.perf_counter() - start, cfg.workers, cfg.execution, outcome.ran)
         outcome.results, outcome.report, outcome.plots = write_report(cfg, plan, study_dir, command)

@@ -8,7 +8,9 @@ settings documented not to change results (workers, evaluation batch size and th
 file lies) travel in ``meta["run"]`` instead. Each step works in ``<study>/steps/<kind>/<key>/`` and
 counts as done only once its ``result.json`` is written (atomically, last): an interrupted step is
 redone, a finished one is never redone. Results name their files relative to the study folder, so a
-moved study folder still resumes.
+moved study folder still resumes. Every result records the code that made it (``provenance``:
+commit, clean tree, source hash; ``core/provenance.py``), never in the key: the runner compares it with
+the current code to find steps made by other code (``runner.py``).
 """
 
 from __future__ import annotations
@@ -31,12 +33,12 @@ from pathlib import Path
 from typing import Any
 
 from .. import __version__  # the package root registers the env and policy types (in a fresh worker too)
+from ..core import provenance
 from ..core.io import atomic_write_text
 from ..core.timing import Timings
 from ..families import family_of
 from ..protocol.conditions import TRAIN_SUITE, fingerprint
 from ..protocol.coverage import coverage
-from ..protocol.sampling import SamplingOptions
 from .inputs import CollectInputs, EvalInputs, TrainInputs
 
 KINDS = ("collect", "train", "eval")
@@ -51,6 +53,7 @@ RUN = "run"  # meta entry: how to run a step, without changing its results (not 
 RESULT_PATHS = ("root", "checkpoint")  # result entries that name files: stored relative to the study folder
 DISTRIBUTION = "lerobot_env_factorworld"
 TIMINGS = "timings"  # result entry: where the step's time went (seconds); never in a key or in results.csv
+PROVENANCE = "provenance"  # result entry: the code that made the step (Provenance.to_dict()); never in a key
 # How steps run (never what they compute: the same step keys, results, checkpoints and datasets either way):
 # ``per_step`` runs every step on its own (``lerobot-train`` as a subprocess, each evaluation loading its
 # policy); ``grouped`` trains in the worker process and evaluates all conditions of a checkpoint in one task.
@@ -62,7 +65,9 @@ VERSIONED = ("lerobot", "torch", "mujoco", "metaworld")  # packages whose versio
 def versions() -> dict[str, str]:
     """The versions in every step's key: this project's and those of the packages that compute results.
 
-    A code change without a version bump is not detected (bump ``STEP_FORMAT`` or the package version).
+    A code change without a version bump keeps the keys (bump ``STEP_FORMAT`` or the package version when
+    a change alters what a step computes); the runner still names cached steps made by other code, from
+    their recorded provenance.
     """
     out = {"lerobot_factorworld": _version(DISTRIBUTION, __version__)}
     out.update({name: _version(name, "unknown") for name in VERSIONED})
@@ -132,6 +137,12 @@ def is_done(step: Step, study_dir: str | Path) -> bool:
     return (step.folder(study_dir) / RESULT_FILE).is_file()
 
 
+def provenance_of(result: dict[str, Any]) -> provenance.Provenance | None:
+    """The code that made a step's result; ``None`` for a result written before provenance was recorded."""
+    data = result.get(PROVENANCE)
+    return provenance.Provenance.from_dict(data) if data else None
+
+
 def read_result(step_or_folder: Step | Path, study_dir: str | Path | None = None) -> dict[str, Any]:
     """A step's result, its paths (``root``, ``checkpoint``) absolute under the study folder it is in now."""
     folder = step_or_folder.folder(study_dir) if isinstance(step_or_folder, Step) else Path(step_or_folder)
@@ -171,7 +182,8 @@ def run_step(step_data: dict[str, Any], study_dir: str, execution: str = "per_st
 
     ``execution`` (``EXECUTIONS``) chooses how, never what: ``grouped`` trains in this process and reuses
     a loaded policy across the conditions of its checkpoint. The result records where the time went
-    (``timings``: seconds per component, ``total`` the step's own wall time)."""
+    (``timings``: seconds per component, ``total`` the step's own wall time) and the code that made it
+    (``provenance``, read once per process, before the first step runs)."""
     os.environ.setdefault("MUJOCO_GL", "egl")
     if execution not in EXECUTIONS:
         raise ValueError(f"unknown execution {execution!r}; valid: {', '.join(EXECUTIONS)}")
@@ -179,6 +191,7 @@ def run_step(step_data: dict[str, Any], study_dir: str, execution: str = "per_st
     folder = step.folder(study_dir)
     if (folder / RESULT_FILE).is_file():
         return read_result(folder)
+    made_by = provenance.current()
     folder.mkdir(parents=True, exist_ok=True)
     atomic_write_text(folder / INPUTS_FILE, json.dumps(step.to_dict(), indent=1, sort_keys=True))
     deps = [_dep_folder(study_dir, key) for key in step.deps]
@@ -193,6 +206,7 @@ def run_step(step_data: dict[str, Any], study_dir: str, execution: str = "per_st
     result["seconds"] = round(time.perf_counter() - start, 2)
     timings.add("total", time.perf_counter() - start)
     result[TIMINGS] = timings.as_dict()
+    result[PROVENANCE] = made_by.to_dict()
     stored = _portable(result, Path(study_dir))
     atomic_write_text(folder / RESULT_FILE, json.dumps(stored, indent=1, sort_keys=True))
     return result
@@ -282,9 +296,7 @@ def collect_config(inputs: CollectInputs | dict[str, Any], root: Path, key: str,
 
     if not isinstance(inputs, CollectInputs):
         inputs = CollectInputs.from_dict(inputs)
-    sampling = SamplingOptions(
-        widths=dict(inputs.widths), n_distractors=inputs.n_distractors, **dict(inputs.family_options)
-    )
+    sampling = inputs.sampling_options()
     return CollectConfig(
         task=inputs.task,
         factors=list(inputs.train_factors),

@@ -1,0 +1,180 @@
+"""P_T against training epochs: how well the paper's CNN BC masters its own training environments.
+
+One run: scripted demos of ``--task`` in ``--n`` training environments (``factorworld collect``, PNG frames),
+one ``lerobot-train`` of ``bc`` that saves a checkpoint every ``--every`` epochs up to ``--epochs``, and a
+``lerobot-eval`` of every checkpoint on those training environments (``--episodes`` episodes, episode ``i``
+reset with seed ``--seed + i``). Writes ``curve.csv`` (epochs, steps, successes, episodes, success rate,
+Wilson 95% interval, the training loss logged nearest to the checkpoint), ``curve.md`` and ``curve.png``
+in ``--out``, and prints the Markdown table.
+
+Resumable: a finished dataset, training or evaluation (its ``eval_info.json``) is reused, so rerunning the
+same command after an interruption redoes only what is missing (an interrupted training starts over).
+
+    MUJOCO_GL=egl .venv/bin/python scripts/learning_curve.py --task pick-place --demos 200 --epochs 40 --every 10
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import json
+import math
+import os
+import re
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+from _bench import REPO_ROOT, add_repo_to_path, setup_headless_gl
+
+setup_headless_gl()
+add_repo_to_path()
+
+from lerobot_factorworld.study.metrics import wilson_interval  # noqa: E402
+from lerobot_factorworld.tasks import check_tasks  # noqa: E402
+
+BIN = Path(sys.executable).parent
+COLUMNS = ("epochs", "steps", "successes", "episodes", "success_rate", "ci_low", "ci_high", "loss")
+
+
+def run(command: list[str], log: Path, env: dict[str, str] | None = None) -> None:
+    """Run ``command``, its output appended to ``log``; a failure stops the script with the log's tail."""
+    with open(log, "a") as out:
+        out.write("$ " + " ".join(command) + "\n")
+        out.flush()
+        proc = subprocess.run(command, stdout=out, stderr=subprocess.STDOUT, cwd=REPO_ROOT, env=env)
+    if proc.returncode != 0:
+        raise SystemExit(
+            f"failed (exit {proc.returncode}): {' '.join(command[:2])}; see {log}:\n" + log.read_text()[-2000:]
+        )
+
+
+def collect(args: argparse.Namespace, data: Path, log: Path) -> int:
+    """Collect the demos once; returns the dataset's frame count."""
+    info = data / "meta" / "info.json"
+    if not info.is_file():
+        run([str(BIN / "factorworld"), "collect", f"--task={args.task}", f"--n_envs={args.n}",
+             f"--demos={args.demos}", f"--action_noise={args.action_noise}", "--use_videos=false",
+             f"--root={data}", f"--repo_id=local/curve_{args.task}", "--mode=overwrite"], log)  # fmt: skip
+    return int(json.loads(info.read_text())["total_frames"])
+
+
+def train(args: argparse.Namespace, data: Path, out: Path, steps_per_save: int, total: int, log: Path) -> None:
+    """Train once to ``total`` steps, a checkpoint every ``steps_per_save``."""
+    if (out / "checkpoints" / f"{total:06d}" / "pretrained_model").is_dir():
+        return
+    if out.exists():  # an interrupted training: start over (lerobot-train refuses an existing folder)
+        out.rename(out.with_name(f"{out.name}.interrupted-{int(time.time())}"))
+    env = {**os.environ, "OMP_NUM_THREADS": str(args.threads)}
+    run([str(BIN / "lerobot-train"), "--policy.type=bc", f"--policy.augmentation={args.augmentation}",
+         "--policy.device=cpu", "--policy.push_to_hub=false", f"--dataset.repo_id=local/curve_{args.task}",
+         f"--dataset.root={data}", f"--steps={total}", f"--batch_size={args.batch_size}", "--num_workers=1",
+         f"--save_freq={steps_per_save}", f"--log_freq={min(100, steps_per_save)}", "--seed=0", f"--output_dir={out}",
+         *args.train_arg], log, env)  # fmt: skip
+
+
+def evaluate(args: argparse.Namespace, checkpoint: Path, out: Path, log: Path) -> list[bool]:
+    """Successes of ``checkpoint`` on the training environments (cached in ``out/eval_info.json``)."""
+    info = out / "eval_info.json"
+    if not info.is_file():
+        run([str(BIN / "lerobot-eval"), f"--policy.path={checkpoint}", "--env.type=factorworld",
+             f"--env.task={args.task}", f"--env.n_train_envs={args.n}", f"--eval.n_episodes={args.episodes}",
+             "--eval.batch_size=1", f"--seed={args.seed}", f"--output_dir={out}"], log)  # fmt: skip
+    data = json.loads(info.read_text())
+    return [bool(s) for task in data["per_task"] for s in task["metrics"]["successes"]]
+
+
+def logged_losses(log: Path) -> dict[int, float]:
+    """``step -> loss`` from lerobot-train's log lines (``step:2K ... loss:0.031``)."""
+    out = {}
+    for match in re.finditer(r"step:(\d+(?:\.\d+)?)([KM]?)\b.*?loss:([0-9.]+)", log.read_text()):
+        number, unit, loss = match.groups()
+        out[int(float(number) * {"": 1, "K": 1e3, "M": 1e6}[unit])] = float(loss)
+    return out
+
+
+def nearest(losses: dict[int, float], step: int) -> float:
+    return losses[min(losses, key=lambda s: abs(s - step))] if losses else math.nan
+
+
+def write_outputs(rows: list[dict], out: Path, title: str) -> str:
+    with open(out / "curve.csv", "w", newline="") as f:
+        writer = csv.DictWriter(f, fieldnames=COLUMNS)
+        writer.writeheader()
+        writer.writerows(rows)
+    lines = ["| epochs | steps | P_T [Wilson 95%] | successes | loss |", "|---|---|---|---|---|"]
+    lines += [
+        f"| {r['epochs']:g} | {r['steps']} | {r['success_rate']:.2f} [{r['ci_low']:.2f}, {r['ci_high']:.2f}] "
+        f"| {r['successes']}/{r['episodes']} | {r['loss']:.4f} |"
+        for r in rows
+    ]
+    table = "\n".join(lines)
+    (out / "curve.md").write_text(f"{title}\n\n{table}\n")
+    import matplotlib  # noqa: PLC0415 - only for the figure, after every run is done
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt  # noqa: PLC0415
+
+    fig, ax = plt.subplots(figsize=(5, 3.2))
+    x = [r["epochs"] for r in rows]
+    ax.plot(x, [r["success_rate"] for r in rows], marker="o")
+    ax.fill_between(x, [r["ci_low"] for r in rows], [r["ci_high"] for r in rows], alpha=0.25)
+    ax.axhline(0.85, color="grey", linestyle="--", linewidth=0.8)
+    ax.set(xlabel="epochs", ylabel="P_T (training environments)", ylim=(0, 1.02), title=title)
+    fig.tight_layout()
+    fig.savefig(out / "curve.png", dpi=120)
+    return table
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--task", default="pick-place")
+    parser.add_argument("--n", type=int, default=5, help="training environments")
+    parser.add_argument("--demos", type=int, default=200)
+    parser.add_argument("--action_noise", type=float, default=0.002)
+    parser.add_argument("--epochs", type=float, default=40)
+    parser.add_argument("--every", type=float, default=10, help="epochs between evaluated checkpoints")
+    parser.add_argument("--batch_size", type=int, default=32)
+    parser.add_argument("--augmentation", default="shift", choices=["none", "shift", "color", "shift+color"])
+    parser.add_argument("--threads", type=int, default=1)
+    parser.add_argument("--episodes", type=int, default=60)
+    parser.add_argument("--seed", type=int, default=1000)
+    parser.add_argument("--train_arg", action="append", default=[], help="another lerobot-train flag")
+    parser.add_argument("--out", default="")
+    args = parser.parse_args()
+    try:
+        check_tasks([args.task])
+    except ValueError as err:
+        raise SystemExit(f"error: {err}") from None
+    if not 0 < args.every <= args.epochs:
+        raise SystemExit(f"error: --every must be in (0, --epochs={args.epochs:g}], got {args.every:g}")
+    out = Path(args.out or f"outputs/curves/{args.task}")
+    out.mkdir(parents=True, exist_ok=True)
+    log = out / "log.txt"
+    start = time.perf_counter()
+    frames = collect(args, out / "data", log)
+    per_save = math.ceil(args.every * frames / args.batch_size)
+    saves = math.ceil(args.epochs / args.every)
+    train(args, out / "data", out / "train", per_save, per_save * saves, log)
+    trained = time.perf_counter()
+    losses = logged_losses(log)
+    rows = []
+    for i in range(1, saves + 1):
+        steps = per_save * i
+        successes = evaluate(args, out / "train" / "checkpoints" / f"{steps:06d}" / "pretrained_model",
+                             out / f"eval_{steps:06d}", log)  # fmt: skip
+        k, n = sum(successes), len(successes)
+        low, high = wilson_interval(k, n)
+        epochs = round(steps * args.batch_size / frames, 2)
+        rows.append({"epochs": epochs, "steps": steps, "successes": k, "episodes": n, "success_rate": k / n,
+                     "ci_low": low, "ci_high": high, "loss": nearest(losses, steps)})  # fmt: skip
+        print(f"{epochs:g} epochs: {k}/{n}", flush=True)
+    title = (f"{args.task}, N = {args.n}, {args.demos} demos ({frames} frames), batch {args.batch_size}, "
+             f"{args.augmentation}, noise {args.action_noise:g}")  # fmt: skip
+    print(write_outputs(rows, out, title))
+    print(f"wall time: {time.perf_counter() - start:.0f} s (training done at {trained - start:.0f} s)")
+
+
+if __name__ == "__main__":
+    main()
