@@ -132,7 +132,12 @@ def cmd_rt1_presets(args: list[str]) -> None:
     print(preset_table())
 
 
-STUDY_FLAG_ALIASES = {"--config": "--config_path", "--dry-run": "--dry_run=true"}
+STUDY_FLAG_ALIASES = {
+    "--config": "--config_path",
+    "--dry-run": "--dry_run=true",
+    "--strict": "--strict=true",
+    "--rerun-stale": "--rerun_stale=true",
+}
 
 
 def cmd_study(args: list[str]) -> None:
@@ -149,6 +154,8 @@ def cmd_study(args: list[str]) -> None:
     ran = ", ".join(f"{n} {kind}" for kind, n in outcome.ran.items())
     cached = ", ".join(f"{n} {kind}" for kind, n in outcome.cached.items())
     print(f"ran {ran}; cached {cached}")
+    if outcome.set_aside:
+        print(f"redid {len(outcome.set_aside)} step(s) made by other code; their old folders end in .stale-<commit>")
     print(f"wrote {outcome.results}, {outcome.report} and {len(outcome.plots)} plot(s)")
     if outcome.failed:
         for label, error in outcome.failed.items():

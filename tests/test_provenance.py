@@ -318,11 +318,12 @@ def test_strict_refuses_with_one_line_before_any_work(finished, ran, capsys):
     assert "--strict=true refuses" in str(err.value)
     assert not ran and (Path(cfg.out_dir) / runner.CONFIG_FILE).read_text() == config_json  # nothing written
     _, path = _study(Path(cfg.out_dir).parent)
-    with pytest.raises(SystemExit) as exit_:
-        main(["study", f"--config={path}", "--strict=true"])
-    assert exit_.value.code != 0
-    err_text = capsys.readouterr().err
-    assert err_text.startswith("error: 1 cached step was made by other code") and len(err_text.splitlines()) == 1
+    for flag in ("--strict=true", "--strict"):  # the spelling is an alias
+        with pytest.raises(SystemExit) as exit_:
+            main(["study", f"--config={path}", flag])
+        assert exit_.value.code != 0
+        err_text = capsys.readouterr().err
+        assert err_text.startswith("error: 1 cached step was made by other code") and len(err_text.splitlines()) == 1
     assert "collect task=door-open n_train_envs=1" in err_text and not ran
     assert collect.folder(cfg.out_dir).is_dir() and (collect.folder(cfg.out_dir) / "data" / "marker").is_file()
 

@@ -431,14 +431,33 @@ def test_cli_dry_run_and_one_line_errors(tmp_path):
     assert result.returncode == 2 and "valid factors" in result.stderr
 
 
-@pytest.mark.parametrize("name", ["quick.yaml", "paper.yaml", "two_tasks.yaml"])
-def test_study_configs_parse_and_plan(name):
+STUDY_CONFIGS = sorted(p.name for p in (ROOT / "configs" / "study").glob("*.yaml"))
+
+
+def _config(name: str):
     from lerobot_factorworld.core.settings import parse_config
     from lerobot_factorworld.study.config import StudyConfig
+
+    return parse_config(StudyConfig, [f"--config_path={ROOT / 'configs' / 'study' / name}"], "study")
+
+
+@pytest.mark.parametrize("name", STUDY_CONFIGS)
+def test_study_configs_parse_and_plan(name):
     from lerobot_factorworld.study.plan import make_plan
 
-    cfg = parse_config(StudyConfig, [f"--config_path={ROOT / 'configs' / 'study' / name}"], "study")
-    assert make_plan(cfg).counts()["eval"] > 0
+    assert make_plan(_config(name)).counts()["eval"] > 0
+
+
+def test_study_datasets_store_lossless_frames_by_default():
+    """Training frames are PNG (lossless) unless a study asks for video: AV1's 4:2:0 chroma would smear a
+    13-pixel object's colour in training while evaluation sees raw renders."""
+    from lerobot_factorworld.study.config import StudyConfig
+    from lerobot_factorworld.study.plan import make_plan
+    from lerobot_factorworld.study.steps import collect_config
+
+    for cfg in (StudyConfig(), *(_config(name) for name in STUDY_CONFIGS)):
+        for step in make_plan(cfg).of_kind("collect"):
+            assert collect_config(step.inputs, Path("unused"), step.key).use_videos is False, cfg.name
 
 
 def test_paper_config_is_the_papers_grid():
