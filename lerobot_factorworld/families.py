@@ -120,6 +120,11 @@ class TaskFamily:
         """Table-frame boxes distractors must avoid; ``None``: measured by sweeping the expert."""
         return None
 
+    def stages(self, task: TaskSpec) -> Any:
+        """The ordered stages an episode can fail at (``envs.stages.Stages``); ``None``: those of the task's
+        kind (object or articulated, ``envs/stages.py``)."""
+        return None
+
     # --- records and report -------------------------------------------------------------------------------
 
     def episode_records(

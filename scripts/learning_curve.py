@@ -4,11 +4,14 @@ One run: scripted demos of ``--task`` in ``--n`` training environments (``factor
 one ``lerobot-train`` of ``bc`` that saves a checkpoint every ``--every`` epochs up to ``--epochs``, and a
 ``lerobot-eval`` of every checkpoint on those training environments (``--episodes`` episodes, episode ``i``
 reset with seed ``--seed + i``). Writes ``curve.csv`` (epochs, steps, successes, episodes, success rate,
-Wilson 95% interval, the training loss logged nearest to the checkpoint), ``curve.md`` and ``curve.png``
+Wilson 95% interval, the training loss logged at the checkpoint), ``curve.md`` and ``curve.png``
 in ``--out``, and prints the Markdown table.
 
 Resumable: a finished dataset, training or evaluation (its ``eval_info.json``) is reused, so rerunning the
-same command after an interruption redoes only what is missing (an interrupted training starts over).
+same command after an interruption redoes only what is missing (an interrupted training starts over). The
+settings are kept in ``settings.json``; rerunning into the same ``--out`` with other settings is refused.
+The loss column is the last training loss LeRobot logged at or before the checkpoint (LeRobot prints steps
+rounded, e.g. ``step:2K``, so it is read from the log's order, one line per ``log_freq`` steps).
 
     MUJOCO_GL=egl .venv/bin/python scripts/learning_curve.py --task pick-place --demos 200 --epochs 40 --every 10
 """
@@ -26,21 +29,21 @@ import sys
 import time
 from pathlib import Path
 
-from _bench import REPO_ROOT, add_repo_to_path, setup_headless_gl
+from _bench import REPO_ROOT, add_repo_to_path, check_tasks, setup_headless_gl
 
 setup_headless_gl()
 add_repo_to_path()
 
 from lerobot_factorworld.study.metrics import wilson_interval  # noqa: E402
-from lerobot_factorworld.tasks import check_tasks  # noqa: E402
 
 BIN = Path(sys.executable).parent
 COLUMNS = ("epochs", "steps", "successes", "episodes", "success_rate", "ci_low", "ci_high", "loss")
 
 
-def run(command: list[str], log: Path, env: dict[str, str] | None = None) -> None:
-    """Run ``command``, its output appended to ``log``; a failure stops the script with the log's tail."""
-    with open(log, "a") as out:
+def run(command: list[str], log: Path, env: dict[str, str] | None = None, append: bool = True) -> None:
+    """Run ``command``, its output appended to ``log`` (or replacing it); a failure stops the script with the
+    log's tail."""
+    with open(log, "a" if append else "w") as out:
         out.write("$ " + " ".join(command) + "\n")
         out.flush()
         proc = subprocess.run(command, stdout=out, stderr=subprocess.STDOUT, cwd=REPO_ROOT, env=env)
@@ -60,6 +63,10 @@ def collect(args: argparse.Namespace, data: Path, log: Path) -> int:
     return int(json.loads(info.read_text())["total_frames"])
 
 
+def log_freq(steps_per_save: int) -> int:
+    return min(100, steps_per_save)
+
+
 def train(args: argparse.Namespace, data: Path, out: Path, steps_per_save: int, total: int, log: Path) -> None:
     """Train once to ``total`` steps, a checkpoint every ``steps_per_save``."""
     if (out / "checkpoints" / f"{total:06d}" / "pretrained_model").is_dir():
@@ -70,8 +77,8 @@ def train(args: argparse.Namespace, data: Path, out: Path, steps_per_save: int, 
     run([str(BIN / "lerobot-train"), "--policy.type=bc", f"--policy.augmentation={args.augmentation}",
          "--policy.device=cpu", "--policy.push_to_hub=false", f"--dataset.repo_id=local/curve_{args.task}",
          f"--dataset.root={data}", f"--steps={total}", f"--batch_size={args.batch_size}", "--num_workers=1",
-         f"--save_freq={steps_per_save}", f"--log_freq={min(100, steps_per_save)}", "--seed=0", f"--output_dir={out}",
-         *args.train_arg], log, env)  # fmt: skip
+         f"--save_freq={steps_per_save}", f"--log_freq={log_freq(steps_per_save)}", "--seed=0",
+         f"--output_dir={out}", *args.train_arg], log, env, append=False)  # fmt: skip
 
 
 def evaluate(args: argparse.Namespace, checkpoint: Path, out: Path, log: Path) -> list[bool]:
@@ -85,17 +92,28 @@ def evaluate(args: argparse.Namespace, checkpoint: Path, out: Path, log: Path) -
     return [bool(s) for task in data["per_task"] for s in task["metrics"]["successes"]]
 
 
-def logged_losses(log: Path) -> dict[int, float]:
-    """``step -> loss`` from lerobot-train's log lines (``step:2K ... loss:0.031``)."""
-    out = {}
-    for match in re.finditer(r"step:(\d+(?:\.\d+)?)([KM]?)\b.*?loss:([0-9.]+)", log.read_text()):
-        number, unit, loss = match.groups()
-        out[int(float(number) * {"": 1, "K": 1e3, "M": 1e6}[unit])] = float(loss)
-    return out
+def logged_losses(log: Path, log_freq: int) -> dict[int, float]:
+    """``step -> loss`` from lerobot-train's log lines (``step:2K ... loss:0.031``): the n-th line is step
+    ``n * log_freq`` (its printed step is rounded)."""
+    losses = [float(m) for m in re.findall(r"step:\S+ smpl:.*?loss:([0-9.]+)", log.read_text())]
+    return {(i + 1) * log_freq: loss for i, loss in enumerate(losses)}
 
 
-def nearest(losses: dict[int, float], step: int) -> float:
-    return losses[min(losses, key=lambda s: abs(s - step))] if losses else math.nan
+def at_or_before(losses: dict[int, float], step: int) -> float:
+    steps = [s for s in losses if s <= step]
+    return losses[max(steps)] if steps else math.nan
+
+
+def check_settings(args: argparse.Namespace, out: Path) -> None:
+    """Refuse to mix a run's cached dataset, checkpoints or evaluations with other settings (one line)."""
+    path, settings = out / "settings.json", {k: v for k, v in vars(args).items() if k != "out"}
+    if path.is_file():
+        old = json.loads(path.read_text())
+        diff = {k: (old.get(k), v) for k, v in settings.items() if old.get(k) != v}
+        if diff:
+            changes = ", ".join(f"{k}: {a} -> {b}" for k, (a, b) in diff.items())
+            raise SystemExit(f"error: {out} holds a run with other settings ({changes}); choose another --out")
+    path.write_text(json.dumps(settings, indent=1, sort_keys=True))
 
 
 def write_outputs(rows: list[dict], out: Path, title: str) -> str:
@@ -143,22 +161,20 @@ def main() -> None:
     parser.add_argument("--train_arg", action="append", default=[], help="another lerobot-train flag")
     parser.add_argument("--out", default="")
     args = parser.parse_args()
-    try:
-        check_tasks([args.task])
-    except ValueError as err:
-        raise SystemExit(f"error: {err}") from None
+    check_tasks(parser, args.task)
     if not 0 < args.every <= args.epochs:
         raise SystemExit(f"error: --every must be in (0, --epochs={args.epochs:g}], got {args.every:g}")
     out = Path(args.out or f"outputs/curves/{args.task}")
     out.mkdir(parents=True, exist_ok=True)
+    check_settings(args, out)
     log = out / "log.txt"
     start = time.perf_counter()
     frames = collect(args, out / "data", log)
     per_save = math.ceil(args.every * frames / args.batch_size)
     saves = math.ceil(args.epochs / args.every)
-    train(args, out / "data", out / "train", per_save, per_save * saves, log)
+    train(args, out / "data", out / "train", per_save, per_save * saves, out / "train_log.txt")
     trained = time.perf_counter()
-    losses = logged_losses(log)
+    losses = logged_losses(out / "train_log.txt", log_freq(per_save))
     rows = []
     for i in range(1, saves + 1):
         steps = per_save * i
@@ -168,7 +184,7 @@ def main() -> None:
         low, high = wilson_interval(k, n)
         epochs = round(steps * args.batch_size / frames, 2)
         rows.append({"epochs": epochs, "steps": steps, "successes": k, "episodes": n, "success_rate": k / n,
-                     "ci_low": low, "ci_high": high, "loss": nearest(losses, steps)})  # fmt: skip
+                     "ci_low": low, "ci_high": high, "loss": at_or_before(losses, steps)})  # fmt: skip
         print(f"{epochs:g} epochs: {k}/{n}", flush=True)
     title = (f"{args.task}, N = {args.n}, {args.demos} demos ({frames} frames), batch {args.batch_size}, "
              f"{args.augmentation}, noise {args.action_noise:g}")  # fmt: skip

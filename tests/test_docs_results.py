@@ -25,7 +25,8 @@ from lerobot_factorworld.study.published import (
     report_table,
     sync_docs,
 )
-from lerobot_factorworld.study.report import NO_TIMINGS, read_results, regenerate_report
+from lerobot_factorworld.study.report import NO_TIMINGS, regenerate_report
+from lerobot_factorworld.study.results import read_results
 
 ROOT = Path(__file__).resolve().parents[1]
 DATA = ROOT / "tests" / "data" / "results"
@@ -36,8 +37,14 @@ SYNC = ROOT / "scripts" / "sync_docs_results.py"
 # --- the repository's own docs and committed results ------------------------------------------------
 
 
+PUBLISHED = {"quick": ROOT / "docs" / "study.md"}  # committed studies and a page that must quote them
+
+
 def test_every_fenced_block_names_a_committed_study():
     studies = committed_studies(ROOT / RESULTS_ROOT)
+    assert set(PUBLISHED) <= set(studies), f"committed results missing under {RESULTS_ROOT}/"
+    for name, page in PUBLISHED.items():
+        assert name in {f.study for f in find_fences(page.read_text(), page)}, f"{page} quotes no {name} table"
     for path in doc_files(ROOT / "docs"):
         for fence in find_fences(path.read_text(), path):
             assert fence.study in studies, f"{fence.label()}: no committed results under {RESULTS_ROOT}/{fence.study}/"
@@ -170,7 +177,7 @@ def test_results_rows_read_back_with_their_types():
     row = rows[0]
     assert isinstance(row["episodes"], int) and isinstance(row["success_rate"], float)
     assert row["condition"] == "train" and row["n_factors"] == 0 and row["gap"] == 0.0
-    assert all(r["commit"] is not None for r in rows)
+    assert all(r["commit"] == "" for r in rows)  # made before commits were recorded: empty, not missing
 
 
 # --- the fenced blocks ----------------------------------------------------------------------------------

@@ -17,7 +17,7 @@ from lerobot_factorworld.core import provenance
 from lerobot_factorworld.core.provenance import Provenance, git_state, source_hash
 from lerobot_factorworld.core.settings import parse_config
 from lerobot_factorworld.study import runner, stale, steps
-from lerobot_factorworld.study.config import StudyConfig
+from lerobot_factorworld.study.config import RUN_CONFIG_FILE, StudyConfig
 from lerobot_factorworld.study.plan import Plan, make_plan
 from lerobot_factorworld.study.results import RESULT_COLUMNS, Evaluation, commits_of, csv_text, result_rows
 
@@ -310,13 +310,13 @@ def test_strict_refuses_with_one_line_before_any_work(finished, ran, capsys):
     cfg, plan = finished
     collect = _collect_n1(plan)
     _made_by(collect, cfg.out_dir, Provenance(OTHER, True, OTHER_HASH))
-    config_json = (Path(cfg.out_dir) / runner.CONFIG_FILE).read_text()
+    config_json = (Path(cfg.out_dir) / RUN_CONFIG_FILE).read_text()
     strict = replace(cfg, strict=True)
     with pytest.raises(ValueError, match="1 cached step was made by other code") as err:
         runner.run_study(strict, command="strict")
     assert "\n" not in str(err.value) and "collect x1 at 826fe54" in str(err.value)
     assert "--strict=true refuses" in str(err.value)
-    assert not ran and (Path(cfg.out_dir) / runner.CONFIG_FILE).read_text() == config_json  # nothing written
+    assert not ran and (Path(cfg.out_dir) / RUN_CONFIG_FILE).read_text() == config_json  # nothing written
     _, path = _study(Path(cfg.out_dir).parent)
     for flag in ("--strict=true", "--strict"):  # the spelling is an alias
         with pytest.raises(SystemExit) as exit_:

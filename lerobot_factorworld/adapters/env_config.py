@@ -14,11 +14,19 @@ from functools import partial
 import gymnasium as gym
 from lerobot.configs import FeatureType, PolicyFeature
 from lerobot.envs.configs import EnvConfig
-from lerobot.utils.constants import ACTION, OBS_IMAGES, OBS_STATE
+from lerobot.utils.constants import ACTION, OBS_IMAGE, OBS_IMAGES, OBS_STATE
 
 from ..assets.library import check_asset_folders
 from ..core.checks import check_at_least, check_image_size, check_input_file, check_seed
 from ..envs.factor_env import CONTROL_FPS, FactorWorldEnv
+from ..envs.lerobot_obs import (
+    FACTORWORLD_OBS,
+    IMAGE_SIZE,
+    LEROBOT_METAWORLD_OBS,
+    STATE_DIM,
+    check_lerobot_task,
+    check_obs_mode,
+)
 from ..factors.registry import PAPER_STUDY_FACTORS, check_factors
 from ..factors.values import load_configs
 from ..protocol.conditions import (
@@ -42,6 +50,10 @@ AGENT_POS_DIM = 8
 ACTION_DIM = 4
 DEFAULT_N_TRAIN_ENVS = 5
 DEFAULT_ENV_SEED = 0
+DEFAULT_CAMERAS = "front"
+DEFAULT_IMAGE_SIZE = 84
+DEFAULT_QUALITY = {FACTORWORLD_OBS: "fast", LEROBOT_METAWORLD_OBS: "full"}  # full: Meta-World's own pixels
+LEROBOT_IMAGE_FEATURE = "pixels/top"  # LeRobot's metaworld config names its corner2 image so
 
 
 @EnvConfig.register_subclass("factorworld")
@@ -54,8 +66,9 @@ class FactorWorldEnvConfig(EnvConfig):
         cameras: Comma-separated camera names (see ``factorworld cameras``); each gives
             ``observation.images.<camera>``.
         image_size: Square image side in pixels.
-        quality: ``fast`` (CPU-friendly, default), ``full`` (Meta-World's shadows and multisampling) or ``lod``
-            (``fast`` with simplified robot meshes: ~2x faster frames, slightly different pixels).
+        quality: ``fast`` (CPU-friendly, the default with ``obs=factorworld``), ``full`` (Meta-World's shadows and
+            multisampling, the default with ``obs=lerobot_metaworld``) or ``lod`` (``fast`` with simplified robot
+            meshes: ~2x faster frames, slightly different pixels).
         episode_length: Step limit; ``None`` uses each task's horizon.
         n_train_envs: Number of training environments N (default 5, or the dataset's).
         train_factors: Factors varied across the training environments (default: the paper's seven, or
@@ -76,13 +89,18 @@ class FactorWorldEnvConfig(EnvConfig):
             ``--env.sampling.rgb_fraction=0.5``: the share of flat-colour textures, ...); ``widths.object_pos``
             (narrow / medium) is also the range of the per-episode object start. With ``dataset_root`` they are
             the dataset's: sampling settings given (other than the defaults) must agree with them.
+        obs: ``factorworld`` (default: ``cameras`` at ``image_size``, 8-number state) or ``lerobot_metaworld``:
+            exactly LeRobot's ``--env.type=metaworld`` features (480 x 480 ``corner2`` image as
+            ``observation.image``, 4-number ``observation.state``), episode starts and task texts, so a
+            checkpoint trained there evaluates here unchanged (docs/lerobot_metaworld.md). Its ``train``
+            condition defaults to Meta-World's unshifted scene (``n_train_envs=1``, ``train_factors=[]``).
     """
 
     task: str = "pick-place"
     fps: int = CONTROL_FPS
-    cameras: str = "front"
-    image_size: int = 84
-    quality: str = "fast"
+    cameras: str = DEFAULT_CAMERAS
+    image_size: int = DEFAULT_IMAGE_SIZE
+    quality: str | None = None
     episode_length: int | None = None
     n_train_envs: int | None = None
     train_factors: list[str] | None = None
@@ -93,22 +111,33 @@ class FactorWorldEnvConfig(EnvConfig):
     include_train: bool = True
     configs_path: str | None = None
     sampling: SamplingOptions = field(default_factory=SamplingOptions)
+    obs: str = FACTORWORLD_OBS
     features: dict[str, PolicyFeature] = field(default_factory=dict)
     features_map: dict[str, str] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
+        check_obs_mode(self.obs)
+        self.quality = DEFAULT_QUALITY[self.obs] if self.quality is None else self.quality
         self._resolve_train_condition()
         self._validate()
-        self.features = {
+        if self.obs == LEROBOT_METAWORLD_OBS:
+            self.features, self.features_map = lerobot_metaworld_features()
+        else:
+            self.features, self.features_map = self._factorworld_features()
+
+    def _factorworld_features(self) -> tuple[dict[str, PolicyFeature], dict[str, str]]:
+        """One ``observation.images.<camera>`` per camera and the 8-number state."""
+        features = {
             ACTION: PolicyFeature(type=FeatureType.ACTION, shape=(ACTION_DIM,)),
             "agent_pos": PolicyFeature(type=FeatureType.STATE, shape=(AGENT_POS_DIM,)),
         }
-        self.features_map = {ACTION: ACTION, "agent_pos": OBS_STATE}
+        features_map = {ACTION: ACTION, "agent_pos": OBS_STATE}
         for cam in self.camera_names:
-            self.features[f"pixels/{cam}"] = PolicyFeature(
+            features[f"pixels/{cam}"] = PolicyFeature(
                 type=FeatureType.VISUAL, shape=(self.image_size, self.image_size, 3)
             )
-            self.features_map[f"pixels/{cam}"] = f"{OBS_IMAGES}.{cam}"
+            features_map[f"pixels/{cam}"] = f"{OBS_IMAGES}.{cam}"
+        return features, features_map
 
     def _validate(self) -> None:
         """Refuse bad settings when the config is parsed, so ``lerobot-eval`` fails before building a policy."""
@@ -137,6 +166,29 @@ class FactorWorldEnvConfig(EnvConfig):
             raise ValueError("nothing to evaluate: include_train=false and no shifts given")
         if self.configs_path:
             self._check_configs_file(tasks)
+        if self.obs == LEROBOT_METAWORLD_OBS:
+            self._check_lerobot_settings(tasks)
+
+    def _check_lerobot_settings(self, tasks: list[str]) -> None:
+        """LeRobot's observation fixes the camera and image size; only Meta-World tasks have LeRobot twins."""
+        if self.cameras != DEFAULT_CAMERAS or self.image_size != DEFAULT_IMAGE_SIZE:
+            raise ValueError(
+                f"obs={LEROBOT_METAWORLD_OBS} fixes the camera (corner2) and image size ({IMAGE_SIZE}); "
+                f"leave cameras and image_size unset (got cameras={self.cameras}, image_size={self.image_size})"
+            )
+        for task in tasks:
+            spec = get_task(task)
+            check_lerobot_task(spec)
+            if spec.goal is not None:
+                logger.warning(
+                    "factorworld: task %s is Factor World's definition (goal %s, success within %s m), not "
+                    "Meta-World's %s that LeRobot's metaworld env runs: a checkpoint trained there solves a "
+                    "different task here",
+                    task,
+                    spec.goal,
+                    spec.success_radius,
+                    spec.metaworld_name,
+                )
 
     def _check_configs_file(self, tasks: list[str]) -> None:
         path = check_input_file(self.configs_path, "configs_path")
@@ -156,8 +208,10 @@ class FactorWorldEnvConfig(EnvConfig):
                 f"(dataset_root={self.dataset_root}, configs_path={self.configs_path})"
             )
         if self.dataset_root is None:
-            self.n_train_envs = DEFAULT_N_TRAIN_ENVS if self.n_train_envs is None else self.n_train_envs
-            self.train_factors = list(PAPER_STUDY_FACTORS) if self.train_factors is None else self.train_factors
+            lerobot = self.obs == LEROBOT_METAWORLD_OBS  # a LeRobot checkpoint's training scene: the unshifted one
+            default_n, default_factors = (1, []) if lerobot else (DEFAULT_N_TRAIN_ENVS, list(PAPER_STUDY_FACTORS))
+            self.n_train_envs = default_n if self.n_train_envs is None else self.n_train_envs
+            self.train_factors = default_factors if self.train_factors is None else self.train_factors
             self.seed = DEFAULT_ENV_SEED if self.seed is None else self.seed
             return
         dataset = read_dataset_condition(self.dataset_root)
@@ -192,6 +246,7 @@ class FactorWorldEnvConfig(EnvConfig):
             "quality": self.quality,
             "max_episode_steps": self.episode_length,
             "object_pos_width": self.sampling.widths.get("object_pos"),
+            "obs": self.obs,
         }
 
     def suites(self, task: str) -> dict:
@@ -239,3 +294,15 @@ class FactorWorldEnvConfig(EnvConfig):
                 vec.setup_coverage(f"{task}/{suite}", len(configs))
                 out.setdefault(suite, {})[task_id] = vec
         return out
+
+
+def lerobot_metaworld_features() -> tuple[dict[str, PolicyFeature], dict[str, str]]:
+    """The features and map of LeRobot 0.6.1's ``MetaworldEnv`` config (``obs_type=pixels_agent_pos``),
+    key for key, so ``env_to_policy_features`` gives a LeRobot Meta-World checkpoint its own inputs."""
+    features = {
+        ACTION: PolicyFeature(type=FeatureType.ACTION, shape=(ACTION_DIM,)),
+        "agent_pos": PolicyFeature(type=FeatureType.STATE, shape=(STATE_DIM,)),
+        LEROBOT_IMAGE_FEATURE: PolicyFeature(type=FeatureType.VISUAL, shape=(IMAGE_SIZE, IMAGE_SIZE, 3)),
+    }
+    features_map = {ACTION: ACTION, "agent_pos": OBS_STATE, "top": OBS_IMAGE, LEROBOT_IMAGE_FEATURE: OBS_IMAGE}
+    return features, features_map

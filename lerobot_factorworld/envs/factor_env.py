@@ -12,6 +12,10 @@ Observation space:
     (:func:`lerobot_factorworld.scene.build.robot_frame_offset`); the state vector scripted experts
     read (``state_observation``) stays in Meta-World's world frame, which is the table's.
     ``cameras=()`` gives a physics-only env without ``pixels`` (scripted experts, physics tests).
+    ``obs="lerobot_metaworld"`` gives LeRobot's ``--env.type=metaworld`` observation instead (``pixels``:
+    uint8 (480, 480, 3) from Meta-World's ``corner2`` flipped on both axes; ``agent_pos``: float64 (4,)),
+    its seeded episode starts and task texts; ``cameras`` and ``image_size`` are then unused
+    (:mod:`lerobot_factorworld.envs.lerobot_obs`).
 
 Action space:
     Box(-1, 1, (4,)): end-effector displacement (x, y, z, 1 cm per unit) and gripper effort.
@@ -29,8 +33,10 @@ Episode end:
 
 Info:
     ``is_success``, ``factors`` (the values the scene really had, defaults filled in), ``env_id``,
-    ``env_index``, ``metaworld_reward``; for a task family with content also the episode's record under the
-    family's ``content_key`` (the pick family's: instruction, named object, objects with their poses).
+    ``env_index``, ``metaworld_reward``, ``stage`` (the furthest stage the episode has reached, judged from
+    Meta-World's own per-step quantities: :mod:`lerobot_factorworld.envs.stages`); for a task family with
+    content also the episode's record under the family's ``content_key`` (the pick family's: instruction,
+    named object, objects with their poses).
 """
 
 from __future__ import annotations
@@ -46,12 +52,14 @@ import numpy as np
 
 from ..core.checks import check_image_size
 from ..factors.registry import FACTORS, factor_range, support_reason
-from ..factors.values import SceneConfig, to_jsonable
+from ..factors.values import FactorValues, SceneConfig, to_jsonable
 from ..families import family_of
 from ..scene.build import DEFAULT_HEADLIGHT, QUALITIES, Quality
 from ..scene.cameras import DEFAULT_CAMERAS, check_camera_names
 from ..tasks import get_task
+from .lerobot_obs import FACTORWORLD_OBS, LEROBOT_METAWORLD_OBS, LeRobotMetaworldObs, check_obs_mode
 from .runtime import CompiledScene
+from .stages import STAGE_KEY, StageTracker, stages_of
 
 PER_EPISODE_FACTORS = ("object_pos", "arm_pos")  # applied at reset; everything else is compiled in
 RESERVED_OPTION_PREFIX = "lerobot_"  # LeRobot's rollout passes {"lerobot_new_rollout": True}
@@ -75,12 +83,17 @@ class FactorWorldEnv(gym.Env):
         terminate_on_success: bool = True,
         render_mode: str | None = "rgb_array",
         scene_cache_size: int = 4,
+        obs: str = FACTORWORLD_OBS,
     ) -> None:
         self.task_spec = get_task(task)
         self._family = family_of(self.task_spec)
         self.configs = _as_configs(self.task_spec.name, configs)
+        self.obs = check_obs_mode(obs)
+        self._lerobot = LeRobotMetaworldObs(self.task_spec) if self.obs == LEROBOT_METAWORLD_OBS else None
+        if self._lerobot is not None:  # LeRobot's image: Meta-World's own corner2 camera, not one of ours
+            cameras, image_size = (), self._lerobot.image_size
         self.cameras = check_camera_names([cameras] if isinstance(cameras, str) else list(cameras), allow_none=True)
-        if not self.cameras:
+        if not self.cameras and self._lerobot is None:
             render_mode = None
         self.image_size = (image_size, image_size) if isinstance(image_size, int) else tuple(image_size)
         check_image_size(self.image_size)
@@ -95,6 +108,8 @@ class FactorWorldEnv(gym.Env):
         self._max_episode_steps = int(max_episode_steps or self.task_spec.max_episode_steps)
         self.task = self.task_spec.name
         self.task_description = self.configs[0].task_description
+        if self._lerobot is not None:
+            self.task_description = self._lerobot.task_description
 
         h, w = self.image_size
         spaces: dict[str, gym.Space] = {"agent_pos": gym.spaces.Box(-np.inf, np.inf, (8,), dtype=np.float32)}
@@ -102,7 +117,7 @@ class FactorWorldEnv(gym.Env):
             spaces["pixels"] = gym.spaces.Dict(
                 {cam: gym.spaces.Box(0, 255, (h, w, 3), dtype=np.uint8) for cam in self.cameras}
             )
-        self.observation_space = gym.spaces.Dict(spaces)
+        self.observation_space = gym.spaces.Dict(spaces) if self._lerobot is None else self._lerobot.observation_space
         self.action_space = gym.spaces.Box(-1.0, 1.0, (4,), dtype=np.float32)
 
         self._scenes: OrderedDict[tuple, CompiledScene] = OrderedDict()
@@ -131,10 +146,13 @@ class FactorWorldEnv(gym.Env):
         scene.reset(object_offset, factors.arm_pos or (0.0, 0.0, 0.0), config)
         self._scene, self._config, self._env_index, self._steps = scene, config, index, 0
         self.task_description = config.task_description
+        if self._lerobot is not None:  # LeRobot's metaworld episode: Meta-World's seeded start, LeRobot's text
+            object_offset = self._start_lerobot_episode(scene, seed, factors)
         self._episode_factors = resolved_factors(config, object_offset)
         self._episode_record = config.episode_record(object_offset)
+        self._stage = StageTracker(stages_of(self.task_spec))  # the furthest stage this episode reaches
         obs = self._observe(scene.metaworld_obs)
-        return obs, self._info(success=False, metaworld_reward=0.0)
+        return obs, {**self._info(success=False, metaworld_reward=0.0), STAGE_KEY: self._stage.name}
 
     def step(self, action: np.ndarray):
         if self._scene is None:
@@ -144,10 +162,12 @@ class FactorWorldEnv(gym.Env):
         self._scene.metaworld_obs = mw_obs
         self._steps += 1
         success = bool(mw_info["success"])
+        stage = self._stage.update(mw_info)
         obs = self._observe(mw_obs)
         terminated = success and self.terminate_on_success
         truncated = self._steps >= self._max_episode_steps
-        return obs, float(success), terminated, truncated, self._info(success, float(mw_reward))
+        info = {**self._info(success, float(mw_reward)), STAGE_KEY: stage}
+        return obs, float(success), terminated, truncated, info
 
     def render(self) -> np.ndarray | None:
         """The first camera's latest frame (already rendered for the observation: no second render)."""
@@ -235,14 +255,30 @@ class FactorWorldEnv(gym.Env):
             args = (self.task_spec, factors, self.cameras, self.quality, self.image_size)
             scene = self._family.make_scene(*args, content) if content is not None else None
             scene = scene or CompiledScene(*args)  # the family's scene, or the plain Meta-World one
+            if self._lerobot is not None:
+                self._lerobot.prepare_scene(scene, factors)
             while len(self._scenes) >= self._scene_cache_size:
                 _, old = self._scenes.popitem(last=False)
                 old.close()
         self._scenes[key] = scene
         return scene
 
+    def _start_lerobot_episode(
+        self, scene: CompiledScene, seed: int | None, factors: FactorValues
+    ) -> tuple[float, float]:
+        """Start where LeRobot's metaworld env starts the episode of ``seed`` (without a seed: of one drawn from
+        this env's generator) and show LeRobot's task text; returns the object's start offset."""
+        assert self._lerobot is not None
+        episode_seed = seed if seed is not None else int(self.np_random.integers(2**31))
+        self.task_description = self._lerobot.task_description
+        return self._lerobot.start_episode(scene, episode_seed, factors)
+
     def _observe(self, mw_obs: np.ndarray) -> dict[str, Any]:
         assert self._scene is not None
+        if self._lerobot is not None:
+            obs = self._lerobot.observe(self._scene, mw_obs)
+            self._last_frame = obs["pixels"]
+            return obs
         obs: dict[str, Any] = {"agent_pos": self._scene.proprioception(mw_obs)}
         if self.cameras:
             obs["pixels"] = self._scene.render_all()

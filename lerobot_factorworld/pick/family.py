@@ -12,6 +12,7 @@ from typing import Any
 
 import numpy as np
 
+from ..envs.stages import SUCCEEDED, Stage, Stages, kind_stages
 from ..families import TaskFamily
 from ..tasks import TaskSpec
 from .catalog import DEFAULT_OBJECTS, LOOKALIKE_FAMILIES, MAX_OBJECTS, MIN_OBJECTS
@@ -21,6 +22,15 @@ from .layout import PickLayout, default_layout, episode_record, workspace_keepou
 from .records import episode_records
 from .report import BREAKDOWN_FILE, report_sections, write_report_files
 from .sampling import CONDITIONS, check_condition, language_shift, sample_layouts
+
+
+def lifted_another(info: dict[str, Any], first: dict[str, Any]) -> bool:
+    return bool(info["wrong_object"])
+
+
+WRONG_OBJECT = Stage("wrong_object", lifted_another)
+"""Another object than the named one was lifted first (``bridge.py``): the episode can no longer succeed. It
+ranks above every progress stage, being the episode's cause of failure, and below success, which it rules out."""
 
 
 class PickFamily(TaskFamily):
@@ -102,6 +112,9 @@ class PickFamily(TaskFamily):
     def keepout(self, task: TaskSpec, clearance: float) -> np.ndarray:
         # Objects change per environment: keep the whole pick workspace free.
         return np.array([workspace_keepout(clearance)], dtype=np.float64)
+
+    def stages(self, task: TaskSpec) -> Stages:
+        return kind_stages(task).inserted(WRONG_OBJECT, before=SUCCEEDED)
 
     def episode_records(
         self, configs: Sequence[Any], seeds: Sequence[int], object_pos_width: str | None = None

@@ -14,14 +14,13 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-from ..core.io import atomic_write_text
+from ..core.io import atomic_write_text, read_table
 from ..protocol.conditions import TRAIN_SUITE
 from ..study.aggregate import main_grid, pooled_success
 from ..study.config import StudyConfig
 from ..study.markdown import FAMILY_DETAILS, FAMILY_RESULTS, ci
 from ..study.metrics import spearman
 from ..study.paper import PAPER_REAL_ROBOT
-from ..study.report import read_table
 from ..study.results import Evaluation, csv_text
 from ..tasks import get_task
 from .records import BY, breakdown

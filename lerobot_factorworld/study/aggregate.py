@@ -36,6 +36,7 @@ from .metrics import (
     wilson_interval,
 )
 from .plan import DEFAULT_WIDTHS
+from .results import parse_stage_counts
 
 Stats = dict[tuple, tuple[float, float, int]]  # group -> (mean over seeds, SE over seeds, number of seeds)
 
@@ -124,6 +125,20 @@ def factor_ordering(rows: Sequence[dict], method: str, factors: Sequence[str]) -
     """Mean gap (over N, tasks; mean and SE over seeds) per single factor of the main grid, for ``method``."""
     stats = gap_per_factor(rows, factors)
     return {f: stats[(method, f)][:2] for f in factors if (method, f) in stats}
+
+
+def stage_counts(rows: Iterable[dict]) -> dict[tuple, dict[str, int]]:
+    """Episodes per furthest stage (the ``stages`` column), per (method, task, N, condition) of the main grid,
+    pooled over seeds; stages in the column's order (the task's), rows without stage counts left out: the
+    "Where episodes fail" table."""
+    out: dict[tuple, dict[str, int]] = {}
+    for row in main_grid(rows):
+        counts = parse_stage_counts(row.get("stages", ""))
+        if counts:
+            total = out.setdefault((row["method"], row["task"], row["n_train_envs"], row["condition"]), {})
+            for name, n in counts.items():
+                total[name] = total.get(name, 0) + n
+    return out
 
 
 # --- intervals: the seed-level bootstrap (metrics.seed_bootstrap) on (seed x cell) arrays -----------

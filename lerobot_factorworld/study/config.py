@@ -259,6 +259,9 @@ class EvalSettings:
     threads: int = 1
 
 
+RUN_CONFIG_FILE = "config.json"  # the settings a study ran with, written into its folder by every run
+
+
 @dataclass
 class StudyConfig:
     """A generalization-gap study.

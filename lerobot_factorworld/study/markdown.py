@@ -24,6 +24,7 @@ from .aggregate import (
     pooled_success,
     radius_rows,
     radius_slopes,
+    stage_counts,
     success_per_condition_and_n,
     summary,
 )
@@ -98,6 +99,7 @@ def render(
         f"- Grid: methods {', '.join(m.name for m in cfg.methods)}; tasks {', '.join(cfg.tasks)}; "
         f"N {cfg.n_train_envs}; seeds {cfg.seeds}; {cfg.collect.demos} demos per dataset"
         + (f" (per task: {cfg.collect.demos_per_task})" if cfg.collect.demos_per_task else "")
+        + f"; textures a flat RGB colour with probability {cfg.collect.effective_rgb_fraction:g}, else an image"
         + f"; training {training} at batch {cfg.train.batch_size}.",
         f"- Evaluation: {ev.episodes} episodes per condition and checkpoint (episode i reset with seed "
         f"{ev.start_seed}+i in every condition, so object starts are paired), {ev.n_test_envs} test environments "
@@ -125,6 +127,7 @@ def render(
     lines += _radius_section(cfg, rows)
     lines += _success_table(cfg, rows)
     lines += _per_task_table(cfg, rows)
+    lines += _stages_section(cfg, rows)
     lines += _cells_table(rows)
     lines += ["## Plots", ""]
     for path in plots:
@@ -388,3 +391,50 @@ def _per_task_table(cfg: StudyConfig, rows: list[dict]) -> list[str]:
                 )
     lines.append("")
     return lines
+
+
+STAGES_NOTE = (
+    "Every evaluated episode ends at the furthest stage it reached, judged from the task's own Meta-World "
+    "quantities (docs/study.md, *Where episodes fail*): object tasks none < reached < grasped < moved < "
+    "succeeded, articulated tasks none < reached < moved < succeeded (the pick family adds wrong_object: another "
+    "object lifted first). A stage counts when its own test held at some step, so an episode may skip one (the "
+    "pick-place expert slides the puck to its goal without lifting it: reached, then moved). Each row gives the "
+    "share of its episodes ending at each stage, pooled over seeds (main grid), the `train` condition first: a "
+    "gap shows as episodes ending at earlier stages."
+)
+
+
+def _stages_section(cfg: StudyConfig, rows: list[dict]) -> list[str]:
+    """Where episodes fail: per method x task x N x condition, the share of episodes by furthest stage, one
+    table per list of stages (tasks of one kind share a table); nothing when no row has stage counts."""
+    counts = stage_counts(rows)
+    if not counts:
+        return []
+    order = [TRAIN_SUITE, *cfg.conditions()]
+    conditions = [*order, *(c for c in dict.fromkeys(k[3] for k in counts) if c not in order)]
+    keys = [
+        (method.name, task, n, condition)
+        for method in cfg.methods
+        for task in dict.fromkeys([*cfg.tasks, *(k[1] for k in counts)])
+        for n in cfg.n_train_envs
+        for condition in conditions
+        if (method.name, task, n, condition) in counts
+    ]
+    tables: dict[tuple[str, ...], list[tuple]] = defaultdict(list)  # stage names -> the keys of its rows
+    for key in keys:
+        tables[tuple(counts[key])].append(key)
+    lines = ["## Where episodes fail (share of episodes by the furthest stage reached)", "", STAGES_NOTE, ""]
+    for names, table_keys in tables.items():
+        lines += [
+            "| method | task | N | condition | episodes | " + " | ".join(names) + " |",
+            "|---|---|---|---|---|" + "---|" * len(names),
+        ]
+        lines += [_stage_row(key, counts[key], names) for key in table_keys]
+        lines.append("")
+    return lines
+
+
+def _stage_row(key: tuple, counts: dict[str, int], names: Sequence[str]) -> str:
+    total = sum(counts.values())
+    shares = " | ".join(f"{counts.get(name, 0) / total:.2f}" for name in names)
+    return "| " + " | ".join(str(k) for k in key) + f" | {total} | {shares} |"

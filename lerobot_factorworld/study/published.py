@@ -24,8 +24,9 @@ from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 
+from ..core.io import atomic_write_text
 from .markdown import REPORT_FILE
-from .report import CONFIG_FILE, load_config, regenerate_report
+from .report import PUBLISHED_CONFIG, load_config, regenerate_report
 from .results import RESULTS_FILE
 
 RESULTS_ROOT = Path("docs") / "results"  # of the repository
@@ -55,11 +56,11 @@ class Fence:
 def find_fences(text: str, path: Path) -> list[Fence]:
     """The fenced blocks of a Markdown text (markers inside code blocks are examples, not fences); a
     malformed, unclosed or nested marker is refused in one line."""
-    fences, opened, offset, code = [], None, 0, False
+    fences, opened, offset, code = [], None, 0, ""  # code: the fence that opened the code block, if any
     for number, line in enumerate(text.splitlines(keepends=True), start=1):
         stripped = line.strip()
-        if stripped.startswith(CODE_FENCES):
-            code = not code
+        if stripped.startswith(CODE_FENCES) and (not code or stripped.startswith(code)):
+            code = "" if code else stripped[:3]  # a ~~~ block is closed by ~~~ only, a ``` block by ```
         elif code:
             pass
         elif stripped.startswith(OPENING):
@@ -98,7 +99,7 @@ def report_table(report: str, section: str, table: int = 1) -> str:
             f"several section headings start with {section!r}: " + "; ".join(lines[i][3:] for i in matches)
         )
     start = matches[0] + 1
-    end = next((i for i in headings if i > start), len(lines))
+    end = next((i for i in headings if i > matches[0]), len(lines))
     tables = _tables(lines[start:end])
     if table > len(tables):
         raise ValueError(f"report section {section!r} has {len(tables)} table(s), not {table}")
@@ -139,9 +140,11 @@ def regenerate_studies(studies: Mapping[str, Path], out_root: Path | None = None
     text. A folder named otherwise than the study its config names is refused."""
     reports = {}
     for name, folder in studies.items():
-        if not (folder / CONFIG_FILE).is_file():
-            raise FileNotFoundError(f"{folder} has no {CONFIG_FILE}: commit the config that made its {RESULTS_FILE}")
-        study = load_config(folder / CONFIG_FILE).name
+        if not (folder / PUBLISHED_CONFIG).is_file():
+            raise FileNotFoundError(
+                f"{folder} has no {PUBLISHED_CONFIG}: commit the config that made its {RESULTS_FILE}"
+            )
+        study = load_config(folder / PUBLISHED_CONFIG).name
         if study != name:
             raise ValueError(f"{folder} holds study {study!r}: its folder must be named {study}")
         out = None if out_root is None else out_root / name
@@ -201,5 +204,5 @@ def sync_docs(docs: Iterable[Path], reports: Mapping[str, str]) -> list[Path]:
         if "".join(new) != text:
             updates[path] = "".join(new)
     for path, text in updates.items():
-        path.write_text(text, encoding="utf-8")
+        atomic_write_text(path, text)
     return list(updates)

@@ -13,37 +13,23 @@ One renderer, two ways in, so a documented number can always be recomputed from 
 
 from __future__ import annotations
 
-import csv
-import math
 import shutil
 from collections.abc import Sequence
 from pathlib import Path
-from typing import Any
 
 from ..core.io import atomic_write_text
 from ..core.settings import parse_config
 from ..families import TaskFamily, family_of
-from .config import StudyConfig
+from .config import RUN_CONFIG_FILE, StudyConfig
 from .markdown import REPORT_FILE, render
 from .plan import Plan, make_plan
 from .plots import write_plots
 from .profile import profile_markdown
-from .results import RESULT_COLUMNS, RESULTS_FILE, finished_evaluations, result_rows, write_results
+from .results import RESULTS_FILE, finished_evaluations, read_results, result_rows, write_results
+from .steps import STEPS_DIR
 
-CONFIG_FILE = "config.yaml"  # the study's config, committed next to its results.csv
+PUBLISHED_CONFIG = "config.yaml"  # the study's config, committed next to its results.csv (docs/results/<study>/)
 REPORT_COMMAND = "report"  # factorworld report
-OPTIONAL_COLUMNS = ("commit", "source_hash")  # provenance, added later: older results.csv files lack them
-INTEGER_COLUMNS = ("n_train_envs", "seed", "n_factors", "n_envs", "episodes", "successes", "envs_visited")
-FLOAT_COLUMNS = (  # empty: NaN (undefined)
-    "success_rate",
-    "ci_low",
-    "ci_high",
-    "train_success_rate",
-    "gap",
-    "gap_ci_low",
-    "gap_ci_high",
-)
-OPTIONAL_FLOAT_COLUMNS = ("radius_m",)  # empty: None (not a radius-sweep row)
 NO_TIMINGS = (
     "*Where the time went* is left out: it comes from the per-step timings in the study's step folders, "
     f"which a report regenerated from `{RESULTS_FILE}` does not read."
@@ -101,23 +87,24 @@ def families_of(cfg: StudyConfig) -> list[TaskFamily]:
 def regenerate_report(
     results: str | Path, config: str | Path | None = None, out: str | Path | None = None
 ) -> tuple[Path, list[Path]]:
-    """``report.md`` and the plots from a ``results.csv``, the study's config (default: ``config.yaml`` next
-    to it) and the families' files next to it; nothing is run. ``out`` (default: the CSV's folder) receives
-    copies of every input, so that the report's "next to this file" holds wherever it is written. Returns
-    the report's and the plots' paths; bad input raises one-line errors (``ValueError``, ``OSError``)."""
+    """``report.md`` and the plots from a ``results.csv``, the study's config and the families' files next to
+    it; nothing is run. The config defaults to the one next to the CSV: a study folder's ``config.json`` (the
+    settings it ran with, command-line overrides included), else a published folder's ``config.yaml``.
+    ``out`` (default: the CSV's folder) receives copies of every input, so that the report's "next to this
+    file" holds wherever it is written; in a study folder that still has its steps the report keeps "Where
+    the time went". Returns the report's and the plots' paths; bad input raises one-line errors."""
     results = Path(results)
-    config = Path(config) if config else results.parent / CONFIG_FILE
-    if not config.is_file():
-        raise FileNotFoundError(
-            f"no study config at {config}: pass --config_path=<the study's config.yaml> or put it next to {results}"
-        )
+    config = Path(config) if config else _config_next_to(results)
     rows = read_results(results)
     cfg = load_config(config)
     check_study_name(rows, cfg.name, results)
+    plan = make_plan(cfg)
+    check_rows_planned(rows, plan, results, config)
     out = Path(out) if out else results.parent
     out.mkdir(parents=True, exist_ok=True)
     _copy(results, out / RESULTS_FILE)
-    _copy(config, out / CONFIG_FILE)
+    if not (out / RUN_CONFIG_FILE).is_file() or config.resolve() != (out / RUN_CONFIG_FILE).resolve():
+        _copy(config, out / PUBLISHED_CONFIG)
     for family in families_of(cfg):
         for name in family.report_files:
             if (results.parent / name).is_file():
@@ -125,7 +112,18 @@ def regenerate_report(
             elif out.resolve() != results.parent.resolve():
                 (out / name).unlink(missing_ok=True)  # a stale copy would be read as this study's
     command = f"factorworld {REPORT_COMMAND} --results={RESULTS_FILE}"
-    return render_report(cfg, rows, out, command, len(make_plan(cfg).of_kind("eval")), [NO_TIMINGS, ""])
+    timing = profile_markdown(plan, out) if (out / STEPS_DIR).is_dir() else []
+    return render_report(cfg, rows, out, command, len(plan.of_kind("eval")), timing or [NO_TIMINGS, ""])
+
+
+def _config_next_to(results: Path) -> Path:
+    for name in (RUN_CONFIG_FILE, PUBLISHED_CONFIG):
+        if (results.parent / name).is_file():
+            return results.parent / name
+    raise FileNotFoundError(
+        f"no study config next to {results} ({RUN_CONFIG_FILE} or {PUBLISHED_CONFIG}): pass --config_path=<the study's "
+        "config YAML>"
+    )
 
 
 def load_config(path: str | Path) -> StudyConfig:
@@ -140,62 +138,24 @@ def check_study_name(rows: Sequence[dict], name: str, results: Path) -> None:
         raise ValueError(f"{results} holds study {', '.join(map(repr, studies))}, but the config is of study {name!r}")
 
 
+def check_rows_planned(rows: Sequence[dict], plan: Plan, results: Path, config: Path) -> None:
+    """Refuse rows the config would not have made (another grid under the same study name): every row's cell
+    and condition must be one of the plan's evaluations, or the report would describe a grid that never ran."""
+    planned = {_cell(step.meta) for step in plan.of_kind("eval")}
+    unplanned = [_cell(row) for row in rows if _cell(row) not in planned]
+    if unplanned:
+        method, task, n, seed, widths, condition = unplanned[0]
+        raise ValueError(
+            f"{len(unplanned)} row(s) of {results} are not in the plan of {config}, e.g. method={method} task={task} "
+            f"N={n} seed={seed} widths={widths} condition={condition}: pass the config that made them"
+        )
+
+
+def _cell(labels: dict) -> tuple:
+    keys = ("method", "task", "n_train_envs", "seed", "widths", "condition")
+    return tuple(str(labels[k]) for k in keys)
+
+
 def _copy(source: Path, target: Path) -> None:
     if not (target.exists() and source.resolve() == target.resolve()):
         shutil.copyfile(source, target)
-
-
-# --- reading the CSV files back ---------------------------------------------------------------------
-
-
-def read_results(path: str | Path) -> list[dict[str, Any]]:
-    """The rows of a ``results.csv`` with their types (as ``result_rows`` made them, floats as written); one
-    that is not a results file is refused in one line. Older files without the provenance columns are read
-    (those columns empty)."""
-    required = [c for c in RESULT_COLUMNS if c not in OPTIONAL_COLUMNS]
-    rows = read_table(path, required, INTEGER_COLUMNS, FLOAT_COLUMNS, OPTIONAL_FLOAT_COLUMNS)
-    return [{**{c: "" for c in OPTIONAL_COLUMNS}, **row} for row in rows]
-
-
-def read_table(
-    path: str | Path,
-    columns: Sequence[str],
-    integers: Sequence[str] = (),
-    floats: Sequence[str] = (),
-    optional_floats: Sequence[str] = (),
-) -> list[dict[str, Any]]:
-    """The rows of a CSV file that must have ``columns`` (more are kept as text); ``integers`` and ``floats``
-    converted (an empty float: NaN, an empty optional float: ``None``). Errors name the file and line."""
-    path = Path(path)
-    try:
-        with path.open(newline="", encoding="utf-8") as f:
-            reader = csv.DictReader(f)
-            header = reader.fieldnames or []
-            missing = [c for c in columns if c not in header]
-            if missing:
-                shown = ",".join(header) or "none"
-                raise ValueError(
-                    f"{path} is not the expected CSV file: it lacks the column(s) {', '.join(missing)} "
-                    f"(its header: {shown[:120] + '...' if len(shown) > 120 else shown})"
-                )
-            return [_typed(row, integers, floats, optional_floats, f"{path} line {reader.line_num}") for row in reader]
-    except (csv.Error, UnicodeDecodeError) as err:
-        raise ValueError(f"{path} is not a readable CSV file: {err}") from None
-
-
-def _typed(
-    row: dict[str, Any], integers: Sequence[str], floats: Sequence[str], optional_floats: Sequence[str], where: str
-) -> dict[str, Any]:
-    if None in row or any(v is None for v in row.values()):
-        raise ValueError(f"{where}: the row has another number of fields than the header")
-    out = dict(row)
-    try:
-        for c in integers:
-            out[c] = int(row[c])
-        for c in floats:
-            out[c] = float(row[c]) if row[c] != "" else math.nan
-        for c in optional_floats:
-            out[c] = float(row[c]) if row[c] != "" else None
-    except ValueError:
-        raise ValueError(f"{where}: column {c} holds {row[c]!r}, not a number") from None
-    return out

@@ -9,13 +9,15 @@ from __future__ import annotations
 import csv
 import io
 import math
+from collections import Counter
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from ..core.io import atomic_write_text
+from ..core.io import atomic_write_text, read_table
 from ..core.provenance import DIRTY, SHORT, SHORT_HASH, UNKNOWN
+from ..envs.stages import stage_names
 from ..protocol.conditions import PAIR_SEPARATOR, TRAIN_SUITE
 from .config import RADIUS_FACTORS, StudyConfig
 from .metrics import paired_gap, wilson_interval
@@ -23,6 +25,7 @@ from .plan import Plan, radius_of
 from .steps import Step, is_done, provenance_of, read_result
 
 RESULTS_FILE = "results.csv"
+STAGE_SEPARATOR = ";"  # between the stage:count items of the stages column
 RESULT_COLUMNS = (
     "study",  # study name
     "method",  # method name from the config
@@ -46,10 +49,25 @@ RESULT_COLUMNS = (
     "gap_ci_high",
     "envs_visited",  # environments the episodes visited (all, equally, unless flagged in report.md)
     "fingerprint",  # hash of the condition's environments (configurations and object-start width)
+    "stages",  # episodes per furthest stage, the task's stages in order: "none:3;reached:2;...;succeeded:5"
     "step",  # key of the eval step (steps/eval/<key>/)
     "commit",  # git commit the evaluation ran at, "-dirty" when the tree differed from it; empty: not recorded
     "source_hash",  # first 12 hex digits of the SHA-256 of the package's source it ran (core/provenance.py)
 )
+
+
+OPTIONAL_COLUMNS = ("stages", "commit", "source_hash")  # added later: older results.csv files lack them
+INTEGER_COLUMNS = ("n_train_envs", "seed", "n_factors", "n_envs", "episodes", "successes", "envs_visited")
+FLOAT_COLUMNS = (  # empty: NaN (undefined)
+    "success_rate",
+    "ci_low",
+    "ci_high",
+    "train_success_rate",
+    "gap",
+    "gap_ci_low",
+    "gap_ci_high",
+)
+OPTIONAL_FLOAT_COLUMNS = ("radius_m",)  # empty: None (not a radius-sweep row)
 
 
 @dataclass(frozen=True)
@@ -114,9 +132,32 @@ def _row(study: str, policies: dict[str, str], evaluation: Evaluation, train: di
         "gap_ci_high": gap_high,
         "envs_visited": res["envs_visited"],
         "fingerprint": res["fingerprint"],
+        "stages": stage_counts_text(meta["task"], res.get("stages")),
         "step": evaluation.step.key,
         **_provenance_columns(res),
     }
+
+
+def stage_counts_text(task: str, stages: Sequence[str] | None) -> str:
+    """The ``stages`` column: how many episodes ended at each stage, every stage of ``task`` in order (zeros
+    too, so the column reads alone), e.g. ``none:3;reached:2;moved:0;succeeded:5``; a stage the task no longer
+    defines comes last. Empty for an evaluation made before stages were recorded (``stages`` is ``None``)."""
+    if stages is None:
+        return ""
+    counts = Counter(stages)
+    names = dict.fromkeys([*stage_names(task), *counts])
+    return STAGE_SEPARATOR.join(f"{name}:{counts[name]}" for name in names)
+
+
+def parse_stage_counts(text: str) -> dict[str, int]:
+    """``none:3;reached:2`` -> ``{"none": 3, "reached": 2}`` in the column's order; ``{}`` for an empty cell."""
+    if not text:
+        return {}
+    pairs = [item.rpartition(":") for item in text.split(STAGE_SEPARATOR)]
+    try:
+        return {name: int(count) for name, _, count in pairs}
+    except ValueError:
+        raise ValueError(f"stages column {text!r} is not 'stage:count;...'") from None
 
 
 def _provenance_columns(result: dict[str, Any]) -> dict[str, str]:
@@ -163,3 +204,12 @@ def _fmt(value) -> str:
     if isinstance(value, float):
         return f"{value:.6f}"
     return str(value)
+
+
+def read_results(path: str | Path) -> list[dict[str, Any]]:
+    """The rows of a ``results.csv`` with their types (as ``result_rows`` made them, floats as written); one
+    that is not a results file is refused in one line. Older files without the stage counts or the provenance
+    columns are read (those columns empty)."""
+    required = [c for c in RESULT_COLUMNS if c not in OPTIONAL_COLUMNS]
+    rows = read_table(path, required, INTEGER_COLUMNS, FLOAT_COLUMNS, OPTIONAL_FLOAT_COLUMNS)
+    return [{**{c: "" for c in OPTIONAL_COLUMNS}, **row} for row in rows]

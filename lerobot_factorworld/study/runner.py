@@ -20,7 +20,7 @@ from pathlib import Path
 from tqdm import tqdm
 
 from ..core.io import atomic_write_json
-from .config import StudyConfig
+from .config import RUN_CONFIG_FILE, StudyConfig
 from .cost import describe, fit_cost_model
 from .executors import make_executor, task_units
 from .plan import Plan, make_plan
@@ -31,7 +31,6 @@ from .steps import KINDS, Step, is_done
 
 LOCK_FILE = ".lock"
 PLAN_FILE = "plan.json"
-CONFIG_FILE = "config.json"
 
 
 @dataclass
@@ -72,7 +71,7 @@ def run_study(cfg: StudyConfig, command: str | None = None) -> StudyOutcome | st
         check_not_stale(cfg, stale)  # strict: before any work
         warn_stale(cfg, plan, study_dir, stale)
         set_aside = rerun_stale(plan, study_dir, stale) if cfg.rerun_stale else []
-        atomic_write_json(study_dir / CONFIG_FILE, asdict(cfg), indent=1, sort_keys=True, default=str)
+        atomic_write_json(study_dir / RUN_CONFIG_FILE, asdict(cfg), indent=1, sort_keys=True, default=str)
         atomic_write_json(
             study_dir / PLAN_FILE, [s.to_dict() for s in plan.steps], indent=1, sort_keys=True, default=str
         )

@@ -27,6 +27,7 @@ import shutil
 import subprocess
 import sys
 import time
+from collections.abc import Iterator
 from dataclasses import dataclass, field
 from importlib import metadata
 from pathlib import Path
@@ -36,6 +37,7 @@ from .. import __version__  # the package root registers the env and policy type
 from ..core import provenance
 from ..core.io import atomic_write_text
 from ..core.timing import Timings
+from ..envs.stages import STAGE_KEY
 from ..families import family_of
 from ..protocol.conditions import TRAIN_SUITE, fingerprint
 from ..protocol.coverage import coverage
@@ -59,6 +61,7 @@ PROVENANCE = "provenance"  # result entry: the code that made the step (Provenan
 # policy); ``grouped`` trains in the worker process and evaluates all conditions of a checkpoint in one task.
 EXECUTIONS = ("grouped", "per_step")
 VERSIONED = ("lerobot", "torch", "mujoco", "metaworld")  # packages whose version changes what a step computes
+STEPS_DIR = "steps"  # <study>/steps/<kind>/<key>/
 
 
 @functools.cache
@@ -123,7 +126,7 @@ class Step:
         return self.meta.get(RUN, {})
 
     def folder(self, study_dir: str | Path) -> Path:
-        return Path(study_dir) / "steps" / self.kind / self.key
+        return Path(study_dir) / STEPS_DIR / self.kind / self.key
 
     def to_dict(self) -> dict[str, Any]:
         return {"kind": self.kind, "inputs": self.inputs, "deps": list(self.deps), "meta": self.meta, "key": self.key}
@@ -161,7 +164,7 @@ def _absolute(value: str, study_dir: Path) -> Path:
         return path
     parts = path.parts
     for i in range(len(parts) - 2, -1, -1):
-        if parts[i] == "steps" and parts[i + 1] in KINDS:
+        if parts[i] == STEPS_DIR and parts[i + 1] in KINDS:
             return study_dir.joinpath(*parts[i:])
     return path
 
@@ -275,7 +278,7 @@ def _output_to(path: Path):
 
 def _dep_folder(study_dir: str, key: str) -> Path:
     for kind in KINDS:
-        folder = Path(study_dir) / "steps" / kind / key
+        folder = Path(study_dir) / STEPS_DIR / kind / key
         if (folder / RESULT_FILE).is_file():
             return folder
     raise RuntimeError(f"step {key} that this step depends on has not finished")
@@ -543,6 +546,7 @@ def _run_eval(step: Step, folder: Path, deps: list[Path]) -> dict[str, Any]:
         timings.wrap(FactorWorldEnv, "step", "env_step"),
         timings.wrap(policy, "select_action", "policy"),
         timings.span("rollout_other"),
+        episode_stages(FactorWorldEnv) as stages,
         torch.no_grad(),
     ):
         info = eval_policy_all(
@@ -566,6 +570,7 @@ def _run_eval(step: Step, folder: Path, deps: list[Path]) -> dict[str, Any]:
             "condition": inputs.condition,
             "successes": successes,
             "seeds": seeds,
+            "stages": stages_of_seeds(stages, seeds),  # the furthest stage of every episode (envs/stages.py)
             "n_envs": len(configs),
             "envs_visited": cover.visited,
             "equal_visits": cover.equal,
@@ -576,6 +581,42 @@ def _run_eval(step: Step, folder: Path, deps: list[Path]) -> dict[str, Any]:
         if family.content_key:  # what every episode asked for (e.g. instruction, named object), for breakdowns
             result[family.content_key] = family.episode_records(configs, seeds, width)
     return result
+
+
+@contextlib.contextmanager
+def episode_stages(env_class: type) -> Iterator[dict[int, str]]:
+    """Inside the block: the furthest stage of every episode of an ``env_class`` env that was reset with a seed,
+    by that seed (``info["stage"]`` of its last step). LeRobot's rollout keeps only each episode's success, so
+    the stages are read off the environments' own steps; an episode begun by an autoreset (no seed), which the
+    rollout discards, is not recorded. The evaluation's environments run in this process (synchronous)."""
+    stages: dict[int, str] = {}
+    seed_of: dict[int, int | None] = {}  # id(env) -> the seed of its current episode
+    reset, step = env_class.reset, env_class.step
+
+    def recording_reset(env, *, seed=None, options=None):
+        seed_of[id(env)] = seed
+        return reset(env, seed=seed, options=options)
+
+    def recording_step(env, action):
+        out = step(env, action)
+        seed = seed_of.get(id(env))
+        if seed is not None and (out[2] or out[3]):
+            stages.setdefault(seed, out[4][STAGE_KEY])
+        return out
+
+    env_class.reset, env_class.step = recording_reset, recording_step
+    try:
+        yield stages
+    finally:
+        env_class.reset, env_class.step = reset, step
+
+
+def stages_of_seeds(stages: dict[int, str], seeds: list[int]) -> list[str]:
+    """The recorded stages of the episodes reset with ``seeds``, in their order; every one must have ended."""
+    missing = [seed for seed in seeds if seed not in stages]
+    if missing:
+        raise RuntimeError(f"no final stage recorded for the episode(s) of seed(s) {missing}: they never ended")
+    return [stages[seed] for seed in seeds]
 
 
 # The policy loaded by the last evaluation of this (``grouped``) worker, with the RNG state right after
