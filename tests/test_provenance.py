@@ -221,9 +221,14 @@ def test_results_rows_carry_the_commit_and_commits_of_names_the_commits(tmp_path
     assert RESULT_COLUMNS[-2:] == ("commit", "source_hash")
     text = csv_text(rows, RESULT_COLUMNS)
     assert text.splitlines()[0].endswith(",commit,source_hash") and f",{OTHER},000000000000" in text
-    assert commits_of(rows) == ["826fe54", "aaaaaaa-dirty", "unknown"]
-    assert commits_of(rows, short=False) == [OTHER, "a" * 40 + "-dirty", "unknown"]
+    assert commits_of(rows) == ["826fe54", "aaaaaaa-dirty (source bbbbbbbbbbbb)", "unknown"]
+    assert commits_of(rows, short=False) == [OTHER, "a" * 40 + "-dirty (source bbbbbbbbbbbb)", "unknown"]
     assert commits_of(rows[:1] * 3) == ["826fe54"]
+    other_changes = {**rows[1], "source_hash": "cccccccccccc"}  # other uncommitted changes on the same commit
+    assert commits_of([rows[1], other_changes]) == [
+        "aaaaaaa-dirty (source bbbbbbbbbbbb)",
+        "aaaaaaa-dirty (source cccccccccccc)",
+    ]
     assert result_rows(cfg, evaluations) == rows  # the same steps, the same rows (a rerun rewrites the same file)
 
 

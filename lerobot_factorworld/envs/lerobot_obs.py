@@ -34,7 +34,7 @@ import numpy as np
 from ..core.checks import check_choice
 from ..factors.values import FactorValues
 from ..tasks import TaskSpec
-from .metaworld import move_hand
+from .metaworld import move_hand, reset_frozen_at, seeded_reset
 from .runtime import CompiledScene
 
 FACTORWORLD_OBS = "factorworld"
@@ -116,8 +116,7 @@ class LeRobotMetaworldObs:
         if scene.task.object_is_free:
             rand_vec[2] += scene.rest_shift  # a resized object rests on the table as before
         if not np.array_equal(rand_vec, drawn):  # a factor moved the start: reset again, frozen at it
-            env._last_rand_vec = rand_vec
-            obs, _ = env.reset()
+            obs = reset_frozen_at(env, rand_vec)
         scene.metaworld_obs = obs
         offset = rand_vec[:2] - env._factorworld_nominal[:2]
         return float(offset[0]), float(offset[1])
@@ -143,16 +142,3 @@ def place_camera(model: Any, robot_offset: np.ndarray, camera_pos: tuple[float, 
         quat /= np.linalg.norm(quat)
     model.cam_pos[cam] = pos
     model.cam_quat[cam] = quat
-
-
-def seeded_reset(env: Any, seed: int) -> tuple[np.ndarray, np.ndarray]:
-    """Reset ``env`` as LeRobot's env does for ``seed`` (Meta-World's own seeded draw of the object and goal);
-    returns Meta-World's state vector and the drawn reset vector. The env is frozen again afterwards, as
-    Factor World keeps it."""
-    env._freeze_rand_vec, env.seeded_rand_vec = False, True
-    try:
-        env.seed(seed)
-        obs, _ = env.reset()
-    finally:
-        env._freeze_rand_vec, env.seeded_rand_vec = True, False
-    return obs, np.array(env._last_rand_vec, dtype=np.float64)

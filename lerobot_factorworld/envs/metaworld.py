@@ -133,3 +133,23 @@ def reset_metaworld(
     move_hand(env, arm_offset)
     obs, _ = env.reset()
     return obs
+
+
+def seeded_reset(env: Any, seed: int) -> tuple[np.ndarray, np.ndarray]:
+    """Reset ``env`` as LeRobot's env does for ``seed`` (Meta-World's own seeded draw of the object and goal);
+    returns Meta-World's state vector and the drawn reset vector. The env is frozen again afterwards, as
+    Factor World keeps it."""
+    env._freeze_rand_vec, env.seeded_rand_vec = False, True
+    try:
+        env.seed(seed)
+        obs, _ = env.reset()
+    finally:
+        env._freeze_rand_vec, env.seeded_rand_vec = True, False
+    return obs, np.array(env._last_rand_vec, dtype=np.float64)
+
+
+def reset_frozen_at(env: Any, rand_vec: np.ndarray) -> np.ndarray:
+    """Reset ``env`` with its random reset vector frozen at ``rand_vec``; returns Meta-World's state vector."""
+    env._last_rand_vec = rand_vec
+    obs, _ = env.reset()
+    return obs

@@ -13,6 +13,7 @@ from collections.abc import Sequence
 from multiprocessing import get_context
 from typing import Any, Protocol
 
+from ..core import provenance
 from .steps import Step, run_steps, warm_up
 
 
@@ -33,7 +34,9 @@ class LocalExecutor:
     def __init__(self, study_dir: str, workers: int, execution: str = "per_step") -> None:
         self.study_dir = study_dir
         self.execution = execution
-        self.pool = cf.ProcessPoolExecutor(workers, mp_context=get_context("spawn"))
+        # Each worker hashes the package source as it starts, when it imports it: an edit made during the
+        # study is then told apart from the code the worker runs (provenance is read once per process).
+        self.pool = cf.ProcessPoolExecutor(workers, mp_context=get_context("spawn"), initializer=provenance.current)
         if execution == "grouped":  # every worker starts and imports now, in parallel, not in its first step
             for _ in range(workers):
                 self.pool.submit(warm_up)

@@ -141,7 +141,7 @@ def render(
 def commit_line(rows: Sequence[dict]) -> str:
     """``Numbers made at commit(s): 826fe54 (6 rows), commit not recorded (2 rows)``, in row order (the
     ``commit`` column through ``results.commits_of``; a CSV made before it was recorded has none)."""
-    counts = Counter(commits_of([row])[0] for row in rows)
+    counts = Counter(commits_of([row])[0] for row in rows)  # one entry per distinct code
     return "Numbers made at commit(s): " + ", ".join(
         f"{'commit not recorded' if commit == UNKNOWN else commit} ({n} row{'s' if n != 1 else ''})"
         for commit, n in counts.items()

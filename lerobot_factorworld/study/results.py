@@ -172,8 +172,16 @@ def _provenance_columns(result: dict[str, Any]) -> dict[str, str]:
 def commits_of(rows: Sequence[dict], short: bool = True) -> list[str]:
     """The commit(s) behind ``rows`` (``results.csv`` rows), each once, in row order: ``826fe54``, or
     ``826fe54-dirty`` for code with uncommitted changes, ``unknown`` for rows that name no commit (made
-    before commits were recorded, or outside a git checkout). ``short``: 7 characters, as ``git log --oneline``."""
-    return list(dict.fromkeys(_short(row.get("commit") or UNKNOWN, short) for row in rows))
+    before commits were recorded, or outside a git checkout). ``short``: 7 characters, as ``git log --oneline``.
+    A dirty revision names its source hash too (``826fe54-dirty (source 1a2b3c4d5e6f)``): two different sets
+    of uncommitted changes on one commit are different code."""
+    return list(dict.fromkeys(_name(row, short) for row in rows))
+
+
+def _name(row: dict, short: bool) -> str:
+    revision = _short(row.get("commit") or UNKNOWN, short)
+    dirty = revision.endswith(DIRTY) or revision == UNKNOWN
+    return f"{revision} (source {row['source_hash']})" if dirty and row.get("source_hash") else revision
 
 
 def _short(revision: str, short: bool) -> str:
