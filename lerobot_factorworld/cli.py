@@ -156,7 +156,7 @@ def cmd_study(args: list[str]) -> None:
     print(f"ran {ran}; cached {cached}")
     if outcome.set_aside:
         print(f"redid {len(outcome.set_aside)} step(s) made by other code; their old folders end in .stale-<commit>")
-    print(f"wrote {outcome.results}, {outcome.report} and {len(outcome.plots)} plot(s)")
+    print(f"wrote {outcome.results} (and episodes.parquet), {outcome.report} and {len(outcome.plots)} plot(s)")
     if outcome.failed:
         for label, error in outcome.failed.items():
             print(f"failed: {label}: {one_line(error)[:300]}", file=sys.stderr)

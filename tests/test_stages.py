@@ -34,7 +34,7 @@ from lerobot_factorworld.study.results import (
     result_rows,
     stage_counts_text,
 )
-from lerobot_factorworld.study.steps import Step, episode_stages, stages_of_seeds
+from lerobot_factorworld.study.steps import Step, episode_stages, of_seeds
 
 DATA = Path(__file__).resolve().parent / "data" / "results"
 OBJECT = ("none", "reached", "grasped", "moved", "succeeded")
@@ -161,7 +161,7 @@ def test_the_evaluation_records_the_stage_of_every_seeded_episode_of_a_vector_en
     original = FactorWorldEnv.reset, FactorWorldEnv.step
     vec = gym.vector.SyncVectorEnv([lambda: FactorWorldEnv(task, cameras=(), max_episode_steps=110)] * 2)
     try:
-        with episode_stages(FactorWorldEnv) as stages:
+        with episode_stages(FactorWorldEnv) as ends:
             vec.reset(seed=[10, 11])
             done = np.zeros(2, bool)
             while not done.all():
@@ -172,10 +172,11 @@ def test_the_evaluation_records_the_stage_of_every_seeded_episode_of_a_vector_en
                 vec.step(np.zeros((2, 4), np.float32))
     finally:
         vec.close()
-    assert stages == {10: "succeeded", 11: "none"}
-    assert stages_of_seeds(stages, [11, 10]) == ["none", "succeeded"]
+    assert ends.stages == {10: "succeeded", 11: "none"}
+    assert of_seeds(ends.stages, [11, 10]) == ["none", "succeeded"]
+    assert ends.lengths[11] == 110 and 0 < ends.lengths[10] < 110  # the idle one ran to the limit
     with pytest.raises(RuntimeError, match=r"seed\(s\) \[12\]"):
-        stages_of_seeds(stages, [10, 12])
+        of_seeds(ends.stages, [10, 12])
     assert (FactorWorldEnv.reset, FactorWorldEnv.step) == original
 
 

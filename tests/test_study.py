@@ -280,6 +280,7 @@ def toy(tmp_path_factory):
 def test_toy_study_end_to_end(toy):
     import csv
 
+    from lerobot_factorworld.study.episodes import EPISODES_FILE, read_episodes
     from lerobot_factorworld.study.results import RESULT_COLUMNS
 
     cfg, outcome = toy
@@ -295,6 +296,8 @@ def test_toy_study_end_to_end(toy):
         assert float(row["ci_low"]) <= float(row["success_rate"]) <= float(row["ci_high"])
         assert float(row["gap"]) == pytest.approx(float(row["train_success_rate"]) - float(row["success_rate"]))
         assert len(row["fingerprint"]) == 16
+    episodes = read_episodes(outcome.results.parent / EPISODES_FILE)  # one row per episode, environments rebuilt
+    assert len(episodes) == sum(int(r["episodes"]) for r in rows) and all(e["factors"] for e in episodes)
     report = outcome.report.read_text()
     assert "## Factor ordering" in report and "Spearman" in report
     assert {p.name for p in outcome.plots} >= {"gap_vs_n.png", "pairs.png", "methods.png", "success_rates.png"}

@@ -1,15 +1,26 @@
-"""Push a collected dataset with LeRobot's own mechanism (folder upload, card, tags, version tag)."""
+"""Push to the Hugging Face Hub: a collected dataset with LeRobot's own mechanism (folder upload, card, tags,
+version tag), or a few plain files (a study's per-episode results and their card) as a dataset repo.
+
+Both say the same thing when the Hub cannot be reached (:class:`HubUnreachableError`): the local files are
+complete, and how to push them later. A plain push asks the Hub once, with a short timeout, before it uploads
+(:func:`check_hub_reachable`): ``huggingface_hub``'s own requests have no timeout, so a machine without a
+network would otherwise wait on them.
+"""
 
 from __future__ import annotations
 
 import json
+from collections.abc import Mapping
 from pathlib import Path
 
 import huggingface_hub
 
+from ..core.checks import check_repo_id
 from .card import card_description, card_tags
 
 LOCAL_NAMESPACE = "local"  # LeRobot's namespace for datasets that stay on disk (``local/<name>``)
+PROBE_TIMEOUT_S = 10.0  # how long a push waits for the Hub to answer before saying it is unreachable
+DATASET = "dataset"  # the Hub's repo type of what is pushed here
 
 
 class HubUnreachableError(RuntimeError):
@@ -27,11 +38,30 @@ def check_push_settings(repo_id: str, push_to_hub: bool, private: bool) -> None:
         if private:
             raise ValueError("private=true only applies to a push: add --push_to_hub=true, or drop --private")
         return
+    check_not_local(repo_id, "repo_id")
+    check_hub_token()
+
+
+def check_not_local(repo_id: str, setting: str) -> None:
+    """Refuse LeRobot's ``local/...`` namespace, which names data that stays on disk, as a push target."""
     if repo_id.split("/", 1)[0] == LOCAL_NAMESPACE:
         raise ValueError(
-            f"push_to_hub=true needs a Hub repo_id ('user/name' with your user or organization), "
+            f"push_to_hub=true needs a Hub {setting} ('user/name' with your user or organization), "
             f"not {repo_id!r} ({LOCAL_NAMESPACE}/... names a dataset that stays on disk)"
         )
+
+
+def check_hub_repo_id(repo_id: str, setting: str) -> None:
+    """A dataset repo a push can target: ``user/name`` as the Hub accepts it, outside the ``local`` namespace."""
+    try:
+        check_repo_id(repo_id)
+    except ValueError as err:
+        raise ValueError(f"{setting}: {err}") from None
+    check_not_local(repo_id, setting)
+
+
+def check_hub_token() -> None:
+    """A push needs a token: refused in one line before any work, rather than after it."""
     try:
         token = huggingface_hub.get_token()
     except Exception as err:  # e.g. a failed OIDC exchange (HF_OIDC_RESOURCE): no usable token
@@ -39,7 +69,7 @@ def check_push_settings(repo_id: str, push_to_hub: bool, private: bool) -> None:
     if not token:
         raise ValueError(
             "push_to_hub=true needs a Hugging Face token with write access: run `hf auth login` or set HF_TOKEN "
-            "(or collect with --push_to_hub=false and push later)"
+            "(or run with --push_to_hub=false and push later)"
         )
 
 
@@ -67,6 +97,49 @@ def push_dataset(root: str | Path, repo_id: str, private: bool = False) -> None:
         raise
 
 
+def check_hub_reachable(timeout: float = PROBE_TIMEOUT_S) -> None:
+    """One request to the Hub that gives up after ``timeout`` seconds (offline mode, no route, no name
+    resolution, a silent firewall: :class:`HubUnreachableError`); any answer, even an error status, means
+    it is reachable."""
+    try:
+        huggingface_hub.get_session().head(huggingface_hub.constants.ENDPOINT, timeout=timeout)
+    except Exception as err:
+        if _is_network_error(err):
+            raise HubUnreachableError(
+                f"could not reach the Hugging Face Hub at {huggingface_hub.constants.ENDPOINT} "
+                f"({type(err).__name__}: {err})"
+            ) from err
+        raise
+
+
+def push_files(repo_id: str, files: Mapping[str, Path | bytes], message: str) -> str:
+    """Upload ``files`` (path in the repo -> a local file or its bytes) to the dataset repo ``repo_id`` in one
+    commit, creating the repo when it does not exist; returns the repo's URL. Nothing is downloaded and no
+    local file is changed. An unreachable Hub raises :class:`HubUnreachableError` within about
+    ``PROBE_TIMEOUT_S`` seconds; a refusal by the Hub (no write access, ...) raises its own error."""
+    check_hub_reachable()
+    api = huggingface_hub.HfApi()
+    operations = [
+        huggingface_hub.CommitOperationAdd(path_in_repo=name, path_or_fileobj=content)
+        for name, content in files.items()
+    ]
+    try:
+        url = api.create_repo(repo_id, repo_type=DATASET, exist_ok=True)
+        api.create_commit(repo_id, operations, commit_message=message, repo_type=DATASET)
+    except Exception as err:
+        if _is_network_error(err) and not _refused(err):
+            raise HubUnreachableError(
+                f"lost the Hugging Face Hub while pushing {repo_id} ({type(err).__name__}: {err})"
+            ) from err
+        raise
+    return str(url)
+
+
+def _refused(err: BaseException) -> bool:
+    """The Hub answered with an error status (no write access, a bad name): not a network failure."""
+    return any(getattr(getattr(e, "response", None), "status_code", None) for e in _chain(err))
+
+
 def _is_network_error(err: BaseException) -> bool:
     names = {type(e).__name__ for e in _chain(err)}
     network = {
@@ -78,6 +151,10 @@ def _is_network_error(err: BaseException) -> bool:
         "ReadTimeout",
         "LocalEntryNotFoundError",
         "MaxRetryError",
+        "PoolTimeout",
+        "WriteTimeout",
+        "ProxyError",
+        "RemoteProtocolError",
         "NameResolutionError",
         "gaierror",
         "HfHubHTTPError",

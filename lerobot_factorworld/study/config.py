@@ -20,6 +20,7 @@ from typing import Any
 
 import draccus
 
+from ..datasets.hub import check_hub_repo_id
 from ..factors.registry import PAPER_STUDY_FACTORS, WIDTHS, check_task_support, get_factor
 from ..families import all_families, condition_family, family_of
 from ..protocol.conditions import PAIR_SEPARATOR, condition_name, parse_shift
@@ -297,6 +298,10 @@ class StudyConfig:
             made by other code than the current (another source hash; see ``core/provenance.py``).
         rerun_stale: Redo the cached steps made by other code, and every cached step that depends on one
             (its inputs are remade); their old folders are kept as ``steps/<kind>/<key>.stale-<commit>``.
+        push_to_hub: After the report, push ``episodes.parquet`` and ``results.csv`` with a dataset card to the
+            Hugging Face dataset repo ``hub_repo_id`` (a token is checked before any work; an unreachable Hub
+            is one warning line, and the local results stay complete). Not done while steps have failed.
+        hub_repo_id: ``user/name`` of that dataset repo (required by ``push_to_hub``).
     """
 
     name: str = "study"
@@ -322,6 +327,8 @@ class StudyConfig:
     fit_cost: bool = False
     strict: bool = False
     rerun_stale: bool = False
+    push_to_hub: bool = False
+    hub_repo_id: str | None = None
 
     def __post_init__(self) -> None:
         self.methods = [m if isinstance(m, MethodConfig) else MethodConfig(**m) for m in self.methods]
@@ -385,6 +392,7 @@ class StudyConfig:
             raise ValueError(f"workers must be at least 1, got {self.workers}")
         if self.strict and self.rerun_stale:
             raise ValueError("strict=true refuses steps made by other code, rerun_stale=true redoes them: set one")
+        self._validate_hub()
         if min(self.n_train_envs) < 1 or len(set(self.n_train_envs)) != len(self.n_train_envs):
             raise ValueError(f"n_train_envs must be distinct positive numbers, got {self.n_train_envs}")
         if len(set(self.seeds)) != len(self.seeds):
@@ -392,6 +400,16 @@ class StudyConfig:
         self._validate_episodes()
         if self.train.epochs is None and self.train.steps < 1:
             raise ValueError("train.steps must be at least 1 (or set train.epochs)")
+
+    def _validate_hub(self) -> None:
+        """A push names its dataset repo, checked with the other settings (the token is the runner's check)."""
+        if not self.push_to_hub:
+            return
+        if not self.hub_repo_id:
+            raise ValueError(
+                "push_to_hub=true needs --hub_repo_id=<user>/<name>, the Hugging Face dataset repo to push to"
+            )
+        check_hub_repo_id(self.hub_repo_id, "hub_repo_id")
 
     def _validate_conditions(self) -> None:
         """Factors apply to every task and are varied in training; a family's conditions need its tasks."""

@@ -1,6 +1,7 @@
-"""Study outputs: ``results.csv`` (``results.py``), PNG plots mirroring the paper's figures (``plots.py``),
-the task families' own files and sections (their ``write_report_files`` and ``report_sections`` hooks, e.g. a
-CSV of breakdowns per episode record), and ``report.md`` (``markdown.py``).
+"""Study outputs: ``results.csv`` (``results.py``), ``episodes.parquet`` (one row per episode: ``episodes.py``),
+PNG plots mirroring the paper's figures (``plots.py``), the task families' own files and sections (their
+``write_report_files`` and ``report_sections`` hooks, e.g. a CSV of breakdowns per episode record), and
+``report.md`` (``markdown.py``).
 
 One renderer, two ways in, so a documented number can always be recomputed from committed files:
 
@@ -21,6 +22,7 @@ from ..core.io import atomic_write_text
 from ..core.settings import parse_config
 from ..families import TaskFamily, family_of
 from .config import RUN_CONFIG_FILE, StudyConfig
+from .episodes import EPISODES_FILE, episode_rows, write_episodes
 from .markdown import REPORT_FILE, render
 from .plan import Plan, make_plan
 from .plots import write_plots
@@ -37,12 +39,13 @@ NO_TIMINGS = (
 
 
 def write_report(cfg: StudyConfig, plan: Plan, study_dir: str | Path, command: str) -> tuple[Path, Path, list[Path]]:
-    """A study that ran: ``results.csv`` and the families' files from the finished evaluations, then the plots
-    and ``report.md`` rendered from them, with where the time went at the end; returns the CSV's, the report's
-    and the plots' paths."""
+    """A study that ran: ``results.csv``, ``episodes.parquet`` and the families' files from the finished
+    evaluations, then the plots and ``report.md`` rendered from them, with where the time went at the end;
+    returns the CSV's, the report's and the plots' paths (the episodes are ``study_dir / EPISODES_FILE``)."""
     study_dir = Path(study_dir)
     evaluations = finished_evaluations(plan, study_dir)
     csv_path = write_results(result_rows(cfg, evaluations), study_dir / RESULTS_FILE)
+    write_episodes(episode_rows(cfg, evaluations, study_dir), study_dir / EPISODES_FILE)
     for family in families_of(cfg):
         family.write_report_files(cfg=cfg, evaluations=evaluations, study_dir=study_dir)
     timing = profile_markdown(plan, study_dir)  # last: it is about the run, not the results

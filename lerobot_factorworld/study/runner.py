@@ -1,5 +1,6 @@
 """Run a study: plan the grid, run the steps that are not cached (dependencies first, ``workers`` at
-a time, on the chosen executor, with progress bars), then write ``results.csv``, plots and ``report.md``.
+a time, on the chosen executor, with progress bars), then write ``results.csv``, ``episodes.parquet``, plots
+and ``report.md``, and push the results to the Hub when asked (``push_to_hub``: one line either way).
 
 A failed step is reported and its dependents are skipped; every other step still runs, so a rerun
 only redoes what failed. One run of a study folder at a time (a lock file guards it).
@@ -20,8 +21,10 @@ from pathlib import Path
 from tqdm import tqdm
 
 from ..core.io import atomic_write_json
+from ..datasets.hub import check_hub_token
 from .config import RUN_CONFIG_FILE, StudyConfig
 from .cost import describe, fit_cost_model
+from .episodes import push_results
 from .executors import make_executor, task_units
 from .plan import Plan, make_plan
 from .profile import profile_text, record_run
@@ -45,6 +48,7 @@ class StudyOutcome:
     results: Path | None = None
     report: Path | None = None
     plots: list[Path] = field(default_factory=list)
+    pushed: bool = False  # the results went to the Hub (push_to_hub)
 
 
 def run_study(cfg: StudyConfig, command: str | None = None) -> StudyOutcome | str:
@@ -64,6 +68,8 @@ def run_study(cfg: StudyConfig, command: str | None = None) -> StudyOutcome | st
     if cfg.fit_cost:
         return fit_cost_model(cfg, plan, study_dir)
     cfg.check_weight_files()  # before any step runs: weights are never downloaded
+    if cfg.push_to_hub:
+        check_hub_token()  # before any step runs, not after hours of them
     study_dir.mkdir(parents=True, exist_ok=True)
     command = command or "factorworld study " + " ".join(shlex.quote(a) for a in sys.argv[2:])
     with _lock(study_dir):
@@ -80,7 +86,23 @@ def run_study(cfg: StudyConfig, command: str | None = None) -> StudyOutcome | st
         if any(outcome.ran.values()):  # before the report, which states it
             record_run(study_dir, time.perf_counter() - start, cfg.workers, cfg.execution, outcome.ran)
         outcome.results, outcome.report, outcome.plots = write_report(cfg, plan, study_dir, command)
+        if cfg.push_to_hub:
+            outcome.pushed = _push(cfg, outcome)
     return outcome
+
+
+def _push(cfg: StudyConfig, outcome: StudyOutcome) -> bool:
+    """Push the written results (``push_results``) and print its one line; never half a study's results."""
+    if outcome.failed or outcome.skipped:
+        print(
+            f"warning: nothing pushed to {cfg.hub_repo_id}: {len(outcome.failed)} step(s) failed; rerun the same "
+            "command to finish the study and push it",
+            file=sys.stderr,
+        )
+        return False
+    pushed, line = push_results(outcome.study_dir, cfg.hub_repo_id)
+    print(line, file=sys.stdout if pushed else sys.stderr, flush=True)
+    return pushed
 
 
 def _execute(cfg: StudyConfig, plan: Plan, study_dir: Path) -> StudyOutcome:

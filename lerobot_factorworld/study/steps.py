@@ -546,7 +546,7 @@ def _run_eval(step: Step, folder: Path, deps: list[Path]) -> dict[str, Any]:
         timings.wrap(FactorWorldEnv, "step", "env_step"),
         timings.wrap(policy, "select_action", "policy"),
         timings.span("rollout_other"),
-        episode_stages(FactorWorldEnv) as stages,
+        episode_stages(FactorWorldEnv) as ends,
         torch.no_grad(),
     ):
         info = eval_policy_all(
@@ -570,7 +570,8 @@ def _run_eval(step: Step, folder: Path, deps: list[Path]) -> dict[str, Any]:
             "condition": inputs.condition,
             "successes": successes,
             "seeds": seeds,
-            "stages": stages_of_seeds(stages, seeds),  # the furthest stage of every episode (envs/stages.py)
+            "stages": of_seeds(ends.stages, seeds),  # the furthest stage of every episode (envs/stages.py)
+            "lengths": of_seeds(ends.lengths, seeds),  # steps of every episode
             "n_envs": len(configs),
             "envs_visited": cover.visited,
             "equal_visits": cover.equal,
@@ -583,40 +584,51 @@ def _run_eval(step: Step, folder: Path, deps: list[Path]) -> dict[str, Any]:
     return result
 
 
+@dataclass
+class EpisodeEnds:
+    """What :func:`episode_stages` records, by reset seed: the furthest stage and the number of steps."""
+
+    stages: dict[int, str] = field(default_factory=dict)
+    lengths: dict[int, int] = field(default_factory=dict)
+
+
 @contextlib.contextmanager
-def episode_stages(env_class: type) -> Iterator[dict[int, str]]:
-    """Inside the block: the furthest stage of every episode of an ``env_class`` env that was reset with a seed,
-    by that seed (``info["stage"]`` of its last step). LeRobot's rollout keeps only each episode's success, so
-    the stages are read off the environments' own steps; an episode begun by an autoreset (no seed), which the
-    rollout discards, is not recorded. The evaluation's environments run in this process (synchronous)."""
-    stages: dict[int, str] = {}
+def episode_stages(env_class: type) -> Iterator[EpisodeEnds]:
+    """Inside the block: the furthest stage and the length in steps of every episode of an ``env_class`` env
+    that was reset with a seed, by that seed (``info["stage"]`` of its last step). LeRobot's rollout keeps only
+    each episode's success, so they are read off the environments' own steps; an episode begun by an autoreset
+    (no seed), which the rollout discards, is not recorded. The evaluation's environments run in this process
+    (synchronous)."""
+    ends = EpisodeEnds()
     seed_of: dict[int, int | None] = {}  # id(env) -> the seed of its current episode
+    steps_of: dict[int, int] = {}  # id(env) -> steps of its current episode
     reset, step = env_class.reset, env_class.step
 
     def recording_reset(env, *, seed=None, options=None):
-        seed_of[id(env)] = seed
+        seed_of[id(env)], steps_of[id(env)] = seed, 0
         return reset(env, seed=seed, options=options)
 
     def recording_step(env, action):
         out = step(env, action)
+        steps_of[id(env)] = steps_of.get(id(env), 0) + 1
         seed = seed_of.get(id(env))
-        if seed is not None and (out[2] or out[3]):
-            stages.setdefault(seed, out[4][STAGE_KEY])
+        if seed is not None and (out[2] or out[3]) and seed not in ends.stages:
+            ends.stages[seed], ends.lengths[seed] = out[4][STAGE_KEY], steps_of[id(env)]
         return out
 
     env_class.reset, env_class.step = recording_reset, recording_step
     try:
-        yield stages
+        yield ends
     finally:
         env_class.reset, env_class.step = reset, step
 
 
-def stages_of_seeds(stages: dict[int, str], seeds: list[int]) -> list[str]:
-    """The recorded stages of the episodes reset with ``seeds``, in their order; every one must have ended."""
-    missing = [seed for seed in seeds if seed not in stages]
+def of_seeds[T](recorded: dict[int, T], seeds: list[int]) -> list[T]:
+    """What was recorded for the episodes reset with ``seeds``, in their order; every one must have ended."""
+    missing = [seed for seed in seeds if seed not in recorded]
     if missing:
-        raise RuntimeError(f"no final stage recorded for the episode(s) of seed(s) {missing}: they never ended")
-    return [stages[seed] for seed in seeds]
+        raise RuntimeError(f"nothing recorded at the end of the episode(s) of seed(s) {missing}: they never ended")
+    return [recorded[seed] for seed in seeds]
 
 
 # The policy loaded by the last evaluation of this (``grouped``) worker, with the RNG state right after
