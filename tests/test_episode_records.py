@@ -41,6 +41,7 @@ from lerobot_factorworld.study.episodes import (
 )
 from lerobot_factorworld.study.inputs import CollectInputs, EvalInputs
 from lerobot_factorworld.study.plan import make_plan
+from lerobot_factorworld.study.report import regenerate_report
 from lerobot_factorworld.study.results import RESULTS_FILE, Evaluation, commits_of, finished_evaluations, read_results
 
 SETTINGS = {
@@ -218,6 +219,9 @@ def test_the_file_loads_with_datasets_and_pandas_and_a_rewrite_is_byte_identical
     assert pq.ParquetFile(chunks).num_row_groups == 7 and read_episodes(chunks) == read_episodes(path)
     empty = episodes.write_episodes([], tmp_path / "none.parquet")
     assert read_episodes(empty) == [] and pq.read_schema(empty).remove_metadata() == SCHEMA
+    published = tmp_path / "published"  # `factorworld report --out=` carries the episodes with the results
+    regenerate_report(outcome.study_dir / "results.csv", out=published)
+    assert (published / EPISODES_FILE).read_bytes() == path.read_bytes()
     pq.write_table(pq.read_table(path).drop(["stage"]), tmp_path / "other.parquet")
     with pytest.raises(ValueError, match=r"other.parquet is not an episodes file: no column\(s\) stage"):
         read_episodes(tmp_path / "other.parquet")

@@ -106,6 +106,8 @@ def regenerate_report(
     out = Path(out) if out else results.parent
     out.mkdir(parents=True, exist_ok=True)
     _copy(results, out / RESULTS_FILE)
+    if (results.parent / EPISODES_FILE).is_file():  # not read by the report, but part of the results
+        _copy(results.parent / EPISODES_FILE, out / EPISODES_FILE)
     if not (out / RUN_CONFIG_FILE).is_file() or config.resolve() != (out / RUN_CONFIG_FILE).resolve():
         _copy(config, out / PUBLISHED_CONFIG)
     for family in families_of(cfg):
