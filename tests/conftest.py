@@ -134,6 +134,8 @@ EXPECTED_SECONDS = {
     "tests/test_rt1.py::test_lerobot_train_lowers_the_loss_and_lerobot_eval_runs_the_checkpoint": 45.0,
     "tests/test_pick.py::test_bc_trains_on_instructions_and_lerobot_eval_reports_held_out_phrasings": 40.0,
     "tests/test_bc.py::test_lerobot_train_frozen_encoder_then_lerobot_eval_without_its_weights_file[clip_rn50]": 35.0,
+    "tests/test_docs_results.py::test_the_sync_script_rewrites_fenced_tables_and_check_finds_stale_ones": 34.0,
+    "tests/test_lerobot_metaworld_obs.py::test_a_checkpoint_made_for_lerobots_metaworld_env_runs_in_lerobot_eval_unchanged": 18.0,
     "tests/test_datasets.py::test_killed_collection_resumes_without_duplicates": 25.0,
     "tests/test_pick.py::test_expert_succeeds_in_default_scenes_and_under_physical_shifts": 18.0,
     "tests/test_study.py::test_cli_dry_run_and_one_line_errors": 16.0,
