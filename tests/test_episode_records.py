@@ -39,6 +39,7 @@ from lerobot_factorworld.study.episodes import (
     read_episodes,
     read_episodes_table,
 )
+from lerobot_factorworld.study.executors import InlineExecutor
 from lerobot_factorworld.study.inputs import CollectInputs, EvalInputs
 from lerobot_factorworld.study.plan import make_plan
 from lerobot_factorworld.study.report import regenerate_report
@@ -103,26 +104,6 @@ def _fake_eval(step: steps.Step, folder: Path, deps: list[Path]) -> dict:
 
 def _fake_train(step: steps.Step, folder: Path, deps: list[Path]) -> dict:
     return {"checkpoint": str(folder / "train"), "steps": 1}
-
-
-class InlineExecutor:
-    """Runs each task at once in this process, so that the fake runners are the ones used."""
-
-    def __init__(self, study_dir: str, execution: str) -> None:
-        self.study_dir, self.execution, self.results = study_dir, execution, []
-
-    def submit(self, unit):
-        self.results.append(steps.run_steps([s.to_dict() for s in unit], self.study_dir, self.execution))
-        return len(self.results) - 1
-
-    def wait_any(self, handles):
-        return handles[:1]
-
-    def result(self, handle):
-        return self.results[handle]
-
-    def shutdown(self) -> None:
-        pass
 
 
 def _fake_steps(mp: pytest.MonkeyPatch) -> None:

@@ -18,6 +18,7 @@ from lerobot_factorworld.core.provenance import Provenance, git_state, source_ha
 from lerobot_factorworld.core.settings import parse_config
 from lerobot_factorworld.study import runner, stale, steps
 from lerobot_factorworld.study.config import RUN_CONFIG_FILE, StudyConfig
+from lerobot_factorworld.study.executors import InlineExecutor
 from lerobot_factorworld.study.plan import Plan, make_plan
 from lerobot_factorworld.study.results import RESULT_COLUMNS, Evaluation, commits_of, csv_text, result_rows
 
@@ -136,26 +137,6 @@ def _fake_result(step: steps.Step, folder: Path) -> dict:
         "fingerprint": "f" * 16,
         "checkpoint": str(folder),
     }
-
-
-class InlineExecutor:
-    """Runs each task at once in this process, so the fake runners monkeypatched here are the ones used."""
-
-    def __init__(self, study_dir: str, execution: str) -> None:
-        self.study_dir, self.execution, self.results = study_dir, execution, []
-
-    def submit(self, unit):
-        self.results.append(steps.run_steps([s.to_dict() for s in unit], self.study_dir, self.execution))
-        return len(self.results) - 1
-
-    def wait_any(self, handles):
-        return handles[:1]
-
-    def result(self, handle):
-        return self.results[handle]
-
-    def shutdown(self) -> None:
-        pass
 
 
 @pytest.fixture

@@ -27,6 +27,27 @@ class Executor(Protocol):
     def shutdown(self) -> None: ...
 
 
+class InlineExecutor:
+    """Runs each task in this process, at once, as it is submitted: what a test or a debugger wants (the
+    runners the process has, patched or not, are the ones used). Not a study setting."""
+
+    def __init__(self, study_dir: str, execution: str = "per_step") -> None:
+        self.study_dir, self.execution, self.results = study_dir, execution, []
+
+    def submit(self, steps: Sequence[Step]) -> int:
+        self.results.append(run_steps([s.to_dict() for s in steps], self.study_dir, self.execution))
+        return len(self.results) - 1
+
+    def wait_any(self, handles: list[int]) -> list[int]:
+        return handles[:1]
+
+    def result(self, handle: int) -> dict[str, str | None]:
+        return self.results[handle]
+
+    def shutdown(self) -> None:
+        pass
+
+
 class LocalExecutor:
     """``workers`` fresh (spawned) processes on this machine, kept for the whole study (imports are paid
     once per worker); each task runs in one of them."""
