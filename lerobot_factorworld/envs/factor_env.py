@@ -152,7 +152,7 @@ class FactorWorldEnv(gym.Env):
         self._episode_record = config.episode_record(object_offset)
         self._stage = StageTracker(stages_of(self.task_spec))  # the furthest stage this episode reaches
         obs = self._observe(scene.metaworld_obs)
-        return obs, {**self._info(success=False, metaworld_reward=0.0), STAGE_KEY: self._stage.name}
+        return obs, self._info(success=False, metaworld_reward=0.0, stage=self._stage.name)
 
     def step(self, action: np.ndarray):
         if self._scene is None:
@@ -166,7 +166,7 @@ class FactorWorldEnv(gym.Env):
         obs = self._observe(mw_obs)
         terminated = success and self.terminate_on_success
         truncated = self._steps >= self._max_episode_steps
-        info = {**self._info(success, float(mw_reward)), STAGE_KEY: stage}
+        info = self._info(success, float(mw_reward), stage)
         return obs, float(success), terminated, truncated, info
 
     def render(self) -> np.ndarray | None:
@@ -285,10 +285,11 @@ class FactorWorldEnv(gym.Env):
             self._last_frame = obs["pixels"][self.cameras[0]]
         return obs
 
-    def _info(self, success: bool, metaworld_reward: float) -> dict[str, Any]:
+    def _info(self, success: bool, metaworld_reward: float, stage: str) -> dict[str, Any]:
         assert self._config is not None
         return {
             "is_success": success,
+            STAGE_KEY: stage,
             "metaworld_reward": metaworld_reward,
             "factors": dict(self._episode_factors),
             "env_id": self._config.env_id,

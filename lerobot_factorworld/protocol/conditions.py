@@ -46,6 +46,11 @@ def parse_shift(shift: str) -> tuple[str, ...]:
     return factors
 
 
+def shifted_factors(condition: str) -> tuple[str, ...]:
+    """The factors a condition shifts (none for ``train``; a family's own condition counts as one)."""
+    return () if condition == TRAIN_SUITE else tuple(condition.split(PAIR_SEPARATOR))
+
+
 def condition_name(factors: Sequence[str]) -> str:
     return PAIR_SEPARATOR.join(factors)
 

@@ -13,6 +13,7 @@ frame (:func:`robot_frame_offset`), so that the robot sees the table move as in 
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 from functools import cache
 from typing import Literal
@@ -73,7 +74,7 @@ def object_geometry(task_name: str) -> ObjectGeometry:
     mujoco.mj_forward(model, data)
     root = model.body(task.object_bodies[0]).id
     lows, highs = [], []
-    for g in _subtree_geoms(model, task.object_bodies):
+    for g in subtree_geoms(model, task.object_bodies):
         if not (model.geom_contype[g] or model.geom_conaffinity[g]):
             continue
         corners = geom_world_corners(model, data, g)
@@ -367,7 +368,8 @@ def _visible_geoms(spec: mujoco.MjSpec, roots: tuple[str, ...]) -> list:
     return [g for g in _subtree_spec_geoms(spec, roots) if g.group in VISIBLE_GROUPS and g.rgba[3] > 0]
 
 
-def _subtree_geoms(model: mujoco.MjModel, roots: tuple[str, ...]) -> list[int]:
+def subtree_geoms(model: mujoco.MjModel, roots: Sequence[str]) -> list[int]:
+    """The geoms of the bodies named ``roots`` and of every body below them."""
     root_ids = {model.body(r).id for r in roots}
     out = []
     for g in range(model.ngeom):

@@ -16,6 +16,7 @@ import mujoco
 import numpy as np
 
 from ..assets.scenes import VISIBLE_GROUPS
+from .build import subtree_geoms
 
 
 def visible_geoms(model: mujoco.MjModel, bodies: Sequence[str]) -> tuple[int, ...]:
@@ -23,20 +24,12 @@ def visible_geoms(model: mujoco.MjModel, bodies: Sequence[str]) -> tuple[int, ..
 
     For a task's object (``TaskSpec.object_bodies``) these are the geoms the object-texture factor paints
     (:func:`lerobot_factorworld.scene.build.build_spec` uses the same rule)."""
-    roots = set()
     for name in bodies:
-        body = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, name)
-        if body < 0:
+        if mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, name) < 0:
             raise ValueError(f"no body {name!r} in the scene")
-        roots.add(body)
-    out = []
-    for geom in range(model.ngeom):
-        body = int(model.geom_bodyid[geom])
-        while body and body not in roots:
-            body = int(model.body_parentid[body])
-        if body in roots and model.geom_group[geom] in VISIBLE_GROUPS and model.geom_rgba[geom, 3] > 0:
-            out.append(geom)
-    return tuple(out)
+    return tuple(
+        g for g in subtree_geoms(model, bodies) if model.geom_group[g] in VISIBLE_GROUPS and model.geom_rgba[g, 3] > 0
+    )
 
 
 class PixelCounter:

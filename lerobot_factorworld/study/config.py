@@ -24,7 +24,7 @@ from ..datasets.hub import check_hub_repo_id
 from ..factors.registry import PAPER_STUDY_FACTORS, WIDTHS, check_task_support, get_factor
 from ..families import all_families, condition_family, family_of
 from ..protocol.conditions import PAIR_SEPARATOR, condition_name, parse_shift
-from ..protocol.sampling import SamplingOptions
+from ..protocol.sampling import DEFAULT_RGB_FRACTION, SamplingOptions
 from ..tasks import get_task
 from .steps import EXECUTIONS  # how steps run, never what they compute
 
@@ -196,7 +196,7 @@ class CollectSettings:
     @property
     def effective_rgb_fraction(self) -> float:
         """``rgb_fraction`` as set, or the sampling default."""
-        return SamplingOptions().rgb_fraction if self.rgb_fraction is None else float(self.rgb_fraction)
+        return DEFAULT_RGB_FRACTION if self.rgb_fraction is None else float(self.rgb_fraction)
 
     def demos_for(self, task: str) -> int:
         return int(self.demos_per_task.get(task, self.demos))

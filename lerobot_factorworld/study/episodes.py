@@ -30,20 +30,19 @@ import pyarrow.compute as pc
 import pyarrow.parquet as pq
 
 from ..core.io import temporary_path
-from ..core.provenance import SHORT_HASH
 from ..core.settings import one_line
 from ..datasets.hub import HubUnreachableError, push_files
 from ..envs.factor_env import env_index_for_seed
 from ..factors.values import SceneConfig
 from ..families import family_of
-from ..protocol.conditions import PAIR_SEPARATOR, TRAIN_SUITE, evaluation_suites, fingerprint
+from ..protocol.conditions import TRAIN_SUITE, evaluation_suites, fingerprint, shifted_factors
 from ..protocol.sidecar import DatasetCondition, read_dataset_condition
 from ..tasks import get_task
 from .config import StudyConfig
 from .inputs import EvalInputs
 from .metrics import wilson_interval
-from .results import RESULTS_FILE, Evaluation, commits_of
-from .steps import RESULT_FILE, STEPS_DIR, Step, provenance_of, read_result
+from .results import RESULTS_FILE, Evaluation, commits_of, provenance_columns
+from .steps import RESULT_FILE, Step, read_result, step_folder
 
 EPISODES_FILE = "episodes.parquet"
 CARD_FILE = "README.md"  # the dataset card, in the pushed repo only
@@ -120,9 +119,9 @@ def evaluation_episodes(
         "seed": int(labels["seed"]),
         "widths": labels["widths"],
         "condition": labels["condition"],
-        "n_factors": n_factors(labels["condition"]),
+        "n_factors": len(shifted_factors(labels["condition"])),
         "step": step,
-        **provenance_columns(result),
+        **provenance_columns(result, empty=None),
     }
     episodes = zip(result["seeds"], result["successes"], stages, lengths, contents, strict=True)
     return [
@@ -158,20 +157,6 @@ def _episode(
 
 def _json(value: Any) -> str:
     return json.dumps(value, sort_keys=True)
-
-
-def n_factors(condition: str) -> int:
-    """Shifted factors of a condition, as ``results.csv`` counts them (a family's condition counts one)."""
-    return 0 if condition == TRAIN_SUITE else len(condition.split(PAIR_SEPARATOR))
-
-
-def provenance_columns(result: Mapping[str, Any]) -> dict[str, str | None]:
-    """``commit`` and ``source_hash`` of a step result, as in ``results.csv`` but null when not recorded."""
-    made_by = provenance_of(dict(result))
-    if made_by is None:
-        return {"commit": None, "source_hash": None}
-    commit = None if made_by.commit is None else made_by.revision()
-    return {"commit": commit, "source_hash": made_by.source_hash[:SHORT_HASH]}
 
 
 def episode_rows(
@@ -217,7 +202,7 @@ def condition_environments(step: Step, result: Mapping[str, Any], rebuild: Rebui
 def _dataset(study_dir: Path, collect_key: str) -> DatasetCondition | None:
     """What the dataset of collect step ``collect_key`` was collected in; ``None`` when that is no collect
     step or its dataset is gone (deleted to save space)."""
-    folder = study_dir / STEPS_DIR / "collect" / collect_key
+    folder = step_folder(study_dir, "collect", collect_key)
     if not (folder / RESULT_FILE).is_file():
         return None
     try:
@@ -325,7 +310,7 @@ def dataset_card(episodes: pa.Table, repo_id: str) -> str:
     load it, the columns, and success per condition with intervals."""
     studies = _distinct(episodes, "study")
     conditions = _distinct(episodes, "condition")
-    factors = list(dict.fromkeys(f for c in conditions if c != TRAIN_SUITE for f in c.split(PAIR_SEPARATOR)))
+    factors = list(dict.fromkeys(f for c in conditions for f in shifted_factors(c)))
     methods = [f"{m['method']} (`{m['policy']}`)" for m in _distinct_rows(episodes, "method", "policy")]
     tags = ["factorworld", "meta-world", "lerobot", "robotics", "generalization", *_distinct(episodes, "task")]
     lines = [

@@ -38,7 +38,7 @@ from .paper import (
     PAPER_PAIRS_WITHIN,
 )
 from .plots import CAPTIONS, PLOTS
-from .results import RESULTS_FILE, commits_of
+from .results import RESULTS_FILE, commit_name
 
 REPORT_FILE = "report.md"
 FAMILY_RESULTS = "results"  # a family's sections after the factor ordering (e.g. next to the paper's table)
@@ -140,8 +140,8 @@ def render(
 
 def commit_line(rows: Sequence[dict]) -> str:
     """``Numbers made at commit(s): 826fe54 (6 rows), commit not recorded (2 rows)``, in row order (the
-    ``commit`` column through ``results.commits_of``; a CSV made before it was recorded has none)."""
-    counts = Counter(commits_of([row])[0] for row in rows)  # one entry per distinct code
+    ``commit`` column through ``results.commit_name``; a CSV made before it was recorded has none)."""
+    counts = Counter(commit_name(row) for row in rows)  # one entry per distinct code
     return "Numbers made at commit(s): " + ", ".join(
         f"{'commit not recorded' if commit == UNKNOWN else commit} ({n} row{'s' if n != 1 else ''})"
         for commit, n in counts.items()

@@ -10,7 +10,7 @@ import csv
 import io
 import math
 from collections import Counter
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -18,7 +18,7 @@ from typing import Any
 from ..core.io import atomic_write_text, read_table
 from ..core.provenance import DIRTY, SHORT, SHORT_HASH, UNKNOWN
 from ..envs.stages import stage_names
-from ..protocol.conditions import PAIR_SEPARATOR, TRAIN_SUITE
+from ..protocol.conditions import TRAIN_SUITE, shifted_factors
 from .config import RADIUS_FACTORS, StudyConfig
 from .metrics import paired_gap, wilson_interval
 from .plan import Plan, radius_of
@@ -107,7 +107,7 @@ def _row(study: str, policies: dict[str, str], evaluation: Evaluation, train: di
             gap = 0.0  # by construction: no interval
         else:
             gap, gap_low, gap_high = paired_gap(train["successes"], res["successes"])
-    factors = [] if condition == TRAIN_SUITE else condition.split(PAIR_SEPARATOR)
+    factors = shifted_factors(condition)
     radius = radius_of(meta["widths"], factors[0]) if len(factors) == 1 and factors[0] in RADIUS_FACTORS else None
     return {
         "study": study,
@@ -134,7 +134,7 @@ def _row(study: str, policies: dict[str, str], evaluation: Evaluation, train: di
         "fingerprint": res["fingerprint"],
         "stages": stage_counts_text(meta["task"], res.get("stages")),
         "step": evaluation.step.key,
-        **_provenance_columns(res),
+        **provenance_columns(res),
     }
 
 
@@ -160,12 +160,13 @@ def parse_stage_counts(text: str) -> dict[str, int]:
         raise ValueError(f"stages column {text!r} is not 'stage:count;...'") from None
 
 
-def _provenance_columns(result: dict[str, Any]) -> dict[str, str]:
-    """``commit`` and ``source_hash`` of an evaluation's result; empty for one made before they were recorded."""
-    made_by = provenance_of(result)
+def provenance_columns(result: Mapping[str, Any], empty: str | None = "") -> dict[str, str | None]:
+    """``commit`` and ``source_hash`` of a step result; ``empty`` for one made before they were recorded
+    (``""`` in ``results.csv``, ``None`` in ``episodes.parquet``)."""
+    made_by = provenance_of(dict(result))
     if made_by is None:
-        return {"commit": "", "source_hash": ""}
-    commit = "" if made_by.commit is None else made_by.revision()
+        return {"commit": empty, "source_hash": empty}
+    commit = empty if made_by.commit is None else made_by.revision()
     return {"commit": commit, "source_hash": made_by.source_hash[:SHORT_HASH]}
 
 
@@ -175,10 +176,11 @@ def commits_of(rows: Sequence[dict], short: bool = True) -> list[str]:
     before commits were recorded, or outside a git checkout). ``short``: 7 characters, as ``git log --oneline``.
     A dirty revision names its source hash too (``826fe54-dirty (source 1a2b3c4d5e6f)``): two different sets
     of uncommitted changes on one commit are different code."""
-    return list(dict.fromkeys(_name(row, short) for row in rows))
+    return list(dict.fromkeys(commit_name(row, short) for row in rows))
 
 
-def _name(row: dict, short: bool) -> str:
+def commit_name(row: dict, short: bool = True) -> str:
+    """The code behind one row, as :func:`commits_of` names it."""
     revision = _short(row.get("commit") or UNKNOWN, short)
     dirty = revision.endswith(DIRTY) or revision == UNKNOWN
     return f"{revision} (source {row['source_hash']})" if dirty and row.get("source_hash") else revision

@@ -113,14 +113,14 @@ def rerun_stale(plan: Plan, study_dir: Path, stale: list[Stale]) -> list[Path]:
     """Move the folders of the ``stale`` steps and of every cached step depending on them aside (to
     ``<key>.stale-<commit>``, the commit that made each), so that they run again; returns the new folders.
     Dependents go first: an interruption leaves no cached step whose inputs are gone."""
-    redo = [s.step for s in stale] + dependents(plan, {s.step.key for s in stale})
+    known = {s.step.key: s.made_by for s in stale}  # read before: no second read of their results
+    redo = [s.step for s in stale] + dependents(plan, set(known))
     order = {s.key: i for i, s in enumerate(plan.steps)}
     moved = []
     for step in sorted(redo, key=lambda s: -order[s.key]):
-        folder = step.folder(study_dir)
         if is_done(step, study_dir):
-            made_by = provenance_of(read_result(step, study_dir))
-            moved.append(_move_aside(folder, made_by.revision(short=True) if made_by else UNKNOWN))
+            made_by = known[step.key] if step.key in known else provenance_of(read_result(step, study_dir))
+            moved.append(_move_aside(step.folder(study_dir), made_by.revision(short=True) if made_by else UNKNOWN))
     return moved
 
 

@@ -126,7 +126,7 @@ class Step:
         return self.meta.get(RUN, {})
 
     def folder(self, study_dir: str | Path) -> Path:
-        return Path(study_dir) / STEPS_DIR / self.kind / self.key
+        return step_folder(study_dir, self.kind, self.key)
 
     def to_dict(self) -> dict[str, Any]:
         return {"kind": self.kind, "inputs": self.inputs, "deps": list(self.deps), "meta": self.meta, "key": self.key}
@@ -276,9 +276,14 @@ def _output_to(path: Path):
                 os.close(fd)
 
 
+def step_folder(study_dir: str | Path, kind: str, key: str) -> Path:
+    """``<study>/steps/<kind>/<key>/``: where a step keeps its result and outputs."""
+    return Path(study_dir) / STEPS_DIR / kind / key
+
+
 def _dep_folder(study_dir: str, key: str) -> Path:
     for kind in KINDS:
-        folder = Path(study_dir) / STEPS_DIR / kind / key
+        folder = step_folder(study_dir, kind, key)
         if (folder / RESULT_FILE).is_file():
             return folder
     raise RuntimeError(f"step {key} that this step depends on has not finished")
