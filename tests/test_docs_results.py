@@ -37,7 +37,11 @@ SYNC = ROOT / "scripts" / "sync_docs_results.py"
 # --- the repository's own docs and committed results ------------------------------------------------
 
 
-PUBLISHED = {"quick": ROOT / "docs" / "study.md", "two_tasks": ROOT / "docs" / "study.md"}  # committed studies and a page that must quote them
+PUBLISHED = {
+    "quick": ROOT / "docs" / "study.md",
+    "two_tasks": ROOT / "docs" / "study.md",
+    "pick": ROOT / "docs" / "pick.md",
+}  # committed studies and a page that must quote them
 
 
 def test_every_fenced_block_names_a_committed_study():
