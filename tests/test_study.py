@@ -434,7 +434,10 @@ def test_cli_dry_run_and_one_line_errors(tmp_path):
     assert result.returncode == 2 and "valid factors" in result.stderr
 
 
-STUDY_CONFIGS = sorted(p.name for p in (ROOT / "configs" / "study").glob("*.yaml"))
+STUDY_CONFIGS = sorted(
+    str(p.relative_to(ROOT / "configs" / "study")) for p in (ROOT / "configs" / "study").rglob("*.yaml")
+)
+FINDINGS = [name for name in STUDY_CONFIGS if name.startswith("findings/")]
 
 
 def _config(name: str):
@@ -449,6 +452,20 @@ def test_study_configs_parse_and_plan(name):
     from lerobot_factorworld.study.plan import make_plan
 
     assert make_plan(_config(name)).counts()["eval"] > 0
+
+
+def test_findings_configs_share_one_recipe_and_their_own_folders():
+    """Every finding (docs/findings.md) trains with the documented recipe, so findings compare; each writes
+    to its own folder named after it, and the pick protocol (F9) differs only where pick.yaml does."""
+    assert len(FINDINGS) >= 9
+    configs = {name: _config(name) for name in FINDINGS}
+    recipe = configs["findings/f1_ordering.yaml"]
+    for name, cfg in configs.items():
+        assert cfg.train == recipe.train, name
+        assert cfg.out_dir == f"outputs/study/findings/{cfg.name}" and name == f"findings/{cfg.name}.yaml", name
+        if cfg.tasks != ["pick"]:
+            assert cfg.collect.demos == recipe.collect.demos, name
+            assert cfg.collect.action_noise == recipe.collect.action_noise, name
 
 
 def test_study_datasets_store_lossless_frames_by_default():
