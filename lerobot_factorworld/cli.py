@@ -9,6 +9,7 @@ Commands:
     collect         scripted demos -> LeRobotDataset with per-episode factor values (resumable)
     rt1-presets     the RT-1 presets and their parameter counts
     study           the generalization-gap study: collect, train, evaluate, report (--config=FILE.yaml, --dry-run)
+    profile         an existing checkpoint under every factor, written as a study (--policy.path=DIR --task=TASK)
     report          regenerate a study's report.md and plots from its results.csv alone (--results=CSV)
 
 Every command reads its settings with :func:`lerobot_factorworld.core.settings.parse_config` (draccus +
@@ -22,6 +23,7 @@ import sys
 import typing
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 from .contact_sheet import ContactSheetConfig, render_contact_sheet
 from .core.checks import check_at_least, check_folder_target, check_input_file, check_output_file, check_seed
@@ -32,6 +34,9 @@ from .factors.values import save_configs
 from .protocol.sampling import SamplingOptions, sample_configs
 from .scene.cameras import CAMERAS
 from .tasks import TASKS, check_tasks
+
+if TYPE_CHECKING:  # the study stack imports LeRobot: only where a command needs it
+    from .study.runner import StudyOutcome
 
 SETTING_ERROR_STATUS = 2  # like argparse: the command line was wrong, nothing was done
 FAILURE_STATUS = 1  # the settings were valid but the work was refused or failed
@@ -147,7 +152,21 @@ def cmd_study(args: list[str]) -> None:
 
     command = "factorworld study " + " ".join(args)
     cfg = parse_config(StudyConfig, [_study_alias(arg) for arg in args], "study")
-    outcome = run_study(cfg, command=command)
+    _report_outcome(run_study(cfg, command=command))
+
+
+def cmd_profile(args: list[str]) -> None:
+    # LeRobot's env config (~4 s): only when this command runs
+    from .study.policy_profile import ProfileConfig  # noqa: PLC0415
+    from .study.runner import run_study  # noqa: PLC0415
+
+    command = "factorworld profile " + " ".join(args)
+    cfg = parse_config(ProfileConfig, [_study_alias(arg) for arg in args], "profile")
+    _report_outcome(run_study(cfg.study(), command=command))
+
+
+def _report_outcome(outcome: StudyOutcome | str) -> None:
+    """What a study (or a profile) did, in a few lines; failed steps on stderr and a failure status."""
     if isinstance(outcome, str):  # --dry-run
         print(outcome)
         return
@@ -234,6 +253,7 @@ COMMANDS: dict[str, Callable[[list[str]], None]] = {
     "collect": cmd_collect,
     "rt1-presets": cmd_rt1_presets,
     "study": cmd_study,
+    "profile": cmd_profile,
     "report": cmd_report,
 }
 

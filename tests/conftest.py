@@ -119,6 +119,85 @@ def tiny_dataset(build_once) -> Path:
     return build_once("pick_place_light", _collect_pick_place_light)
 
 
+def _train_bc(dataset: Path, folder: Path) -> Path:
+    """``lerobot-train`` of bc for 2 steps on ``dataset`` (``tiny_dataset``): its ``pretrained_model`` folder."""
+    out = folder / "train"
+    _run_tool(
+        "lerobot-train",
+        "--policy.type=bc",
+        "--policy.device=cpu",
+        "--policy.push_to_hub=false",
+        "--dataset.repo_id=local/pp",
+        f"--dataset.root={dataset}",
+        "--steps=2",
+        "--batch_size=4",
+        "--num_workers=0",
+        "--save_freq=2",
+        "--seed=0",
+        "--wandb.enable=false",
+        f"--output_dir={out}",
+    )
+    return out / "checkpoints" / "last" / "pretrained_model"
+
+
+@pytest.fixture(scope="session")
+def bc_checkpoint(build_once, tiny_dataset) -> Path:
+    """A real LeRobot ``pretrained_model``: bc trained 2 steps on ``tiny_dataset`` (pick-place, the front camera at
+    84 px, 8-number state), for the tests that evaluate a given checkpoint. Read it, never change it."""
+    return build_once("bc_checkpoint", functools.partial(_train_bc, tiny_dataset))
+
+
+def _untrained_checkpoint(config, env_cfg, folder: Path) -> Path:
+    """A LeRobot ``pretrained_model`` folder (config, weights, processors) of an untrained policy made for
+    ``env_cfg``'s features, as ``lerobot-train`` would save one trained there."""
+    from lerobot.policies.factory import make_policy, make_pre_post_processors  # LeRobot's policy stack (seconds)
+
+    policy = make_policy(config, env_cfg=env_cfg)
+    for part in (policy, *make_pre_post_processors(config)):
+        part.save_pretrained(folder)
+    return folder
+
+
+def _lerobot_metaworld_act(folder: Path) -> Path:
+    # LeRobot's policy and env configs (seconds to import): only the tests that use this checkpoint pay for them
+    from lerobot.envs.configs import MetaworldEnv as LeRobotMetaworldConfig
+    from lerobot.policies.act.configuration_act import ACTConfig
+
+    config = ACTConfig(
+        pretrained_backbone_weights=None,
+        device="cpu",
+        dim_model=32,
+        dim_feedforward=64,
+        n_encoder_layers=1,
+        n_decoder_layers=1,
+        chunk_size=4,
+        n_action_steps=4,
+    )
+    # the features of LeRobot's metaworld env are the same for every task
+    return _untrained_checkpoint(config, LeRobotMetaworldConfig(task="button-press-v3"), folder / "checkpoint")
+
+
+@pytest.fixture(scope="session")
+def lerobot_metaworld_checkpoint(build_once) -> Path:
+    """A (tiny, untrained) ACT ``pretrained_model`` built against LeRobot's own ``metaworld`` env config
+    (``observation.image`` 480 x 480, 4-number ``observation.state``), as a checkpoint trained there would be."""
+    return build_once("lerobot_metaworld_act", _lerobot_metaworld_act)
+
+
+def _factorworld_bc(folder: Path) -> Path:
+    from lerobot_factorworld.adapters.env_config import FactorWorldEnvConfig  # LeRobot's env config (seconds)
+    from lerobot_factorworld.policies.bc.configuration_bc import BCConfig
+
+    return _untrained_checkpoint(BCConfig(device="cpu"), FactorWorldEnvConfig(), folder / "checkpoint")
+
+
+@pytest.fixture(scope="session")
+def factorworld_checkpoint(build_once) -> Path:
+    """An untrained bc ``pretrained_model`` made for the ``factorworld`` env's default observation (the front
+    camera at 84 px, 8-number state): what the checks of a given checkpoint read, without a training run."""
+    return build_once("factorworld_bc", _factorworld_bc)
+
+
 # --- scheduling --------------------------------------------------------------------------------------
 
 # Seconds a test (or an xdist group, summed) took in a full run on 2 busy cores; a test not listed counts as
@@ -129,6 +208,8 @@ EXPECTED_SECONDS = {
     "tests/test_bench_scripts.py::test_bench_script_quick_prints_ratio_last[bc]": 70.0,
     "tests/test_bench_scripts.py::test_bench_script_quick_prints_ratio_last[collect]": 70.0,
     "tests/test_throughput.py::test_bench_study_quick_runs_both_executions_with_identical_results": 60.0,
+    # with its bc_checkpoint fixture (collecting tiny_dataset, lerobot-train) when it is the first to ask for them
+    "tests/test_profile.py::test_profile_writes_a_studys_outputs_without_collecting_or_training": 55.0,
     "tests/test_pick.py::test_rt1_trains_across_instructions_and_lerobot_eval_reports_every_condition": 50.0,
     "tests/test_bc.py::test_lerobot_train_frozen_encoder_then_lerobot_eval_without_its_weights_file[r3m_rn50]": 45.0,
     "tests/test_rt1.py::test_lerobot_train_lowers_the_loss_and_lerobot_eval_runs_the_checkpoint": 45.0,
@@ -136,6 +217,7 @@ EXPECTED_SECONDS = {
     "tests/test_bc.py::test_lerobot_train_frozen_encoder_then_lerobot_eval_without_its_weights_file[clip_rn50]": 35.0,
     "tests/test_docs_results.py::test_the_sync_script_rewrites_fenced_tables_and_check_finds_stale_ones": 34.0,
     "tests/test_lerobot_metaworld_obs.py::test_a_checkpoint_made_for_lerobots_metaworld_env_runs_in_lerobot_eval_unchanged": 18.0,
+    "tests/test_profile.py::test_profile_of_a_lerobot_metaworld_checkpoint": 30.0,
     "tests/test_datasets.py::test_killed_collection_resumes_without_duplicates": 25.0,
     "tests/test_pick.py::test_expert_succeeds_in_default_scenes_and_under_physical_shifts": 18.0,
     "tests/test_study.py::test_cli_dry_run_and_one_line_errors": 16.0,

@@ -10,12 +10,11 @@ import shutil
 
 import numpy as np
 import pytest
+from lerobot.configs.policies import PreTrainedConfig
 from lerobot.envs.configs import MetaworldEnv as LeRobotMetaworldConfig
 from lerobot.envs.metaworld import TASK_POLICY_MAPPING
 from lerobot.envs.metaworld import MetaworldEnv as LeRobotMetaworldEnv
 from lerobot.envs.utils import env_to_policy_features, preprocess_observation
-from lerobot.policies.act.configuration_act import ACTConfig
-from lerobot.policies.factory import make_policy, make_pre_post_processors
 
 from lerobot_factorworld.adapters.env_config import FactorWorldEnvConfig
 from lerobot_factorworld.envs.lerobot_obs import CAMERA, CAMERA_POS
@@ -142,24 +141,13 @@ def test_every_factor_changes_pixels_and_keeps_shapes(make_env):
 
 
 @pytest.mark.slow
-def test_a_checkpoint_made_for_lerobots_metaworld_env_runs_in_lerobot_eval_unchanged(tmp_path, run_tool):
+def test_a_checkpoint_made_for_lerobots_metaworld_env_runs_in_lerobot_eval_unchanged(
+    tmp_path, run_tool, lerobot_metaworld_checkpoint
+):
     """A (tiny, untrained) ACT checkpoint built against LeRobot's ``metaworld`` env config: ``lerobot-eval
     --policy.path`` runs it on Factor World, unshifted and under a factor, with no rename or override."""
-    config = ACTConfig(
-        pretrained_backbone_weights=None,
-        device="cpu",
-        dim_model=32,
-        dim_feedforward=64,
-        n_encoder_layers=1,
-        n_decoder_layers=1,
-        chunk_size=4,
-        n_action_steps=4,
-    )
-    policy = make_policy(config, env_cfg=LeRobotMetaworldConfig(task=f"{TASK}-v3"))
-    checkpoint = tmp_path / "checkpoint"
-    for part in (policy, *make_pre_post_processors(config)):
-        part.save_pretrained(checkpoint)
-    assert policy.config.input_features == {
+    checkpoint = lerobot_metaworld_checkpoint
+    assert PreTrainedConfig.from_pretrained(checkpoint).input_features == {
         k: v for k, v in env_to_policy_features(FactorWorldEnvConfig(task=TASK, obs=OBS)).items() if k != "action"
     }
     out = tmp_path / "eval"

@@ -21,11 +21,13 @@ from typing import Any
 import draccus
 
 from ..datasets.hub import check_hub_repo_id
+from ..envs.lerobot_obs import FACTORWORLD_OBS, LEROBOT_METAWORLD_OBS, check_lerobot_task, check_obs_mode
 from ..factors.registry import PAPER_STUDY_FACTORS, WIDTHS, check_task_support, get_factor
 from ..families import all_families, condition_family, family_of
 from ..protocol.conditions import PAIR_SEPARATOR, condition_name, parse_shift
 from ..protocol.sampling import DEFAULT_RGB_FRACTION, SamplingOptions
 from ..tasks import get_task
+from .checkpoint import checkpoint_setting
 from .steps import EXECUTIONS  # how steps run, never what they compute
 
 EXECUTORS = ("local", "ray")
@@ -107,21 +109,55 @@ def check_device(setting: str, device: str) -> None:
 
 @dataclass
 class MethodConfig:
-    """A method = a LeRobot policy type and its overrides, e.g. ``{type: bc, augmentation: shift}``.
+    """A method: a LeRobot policy type and its overrides, trained on every dataset of the study, e.g.
+    ``{name: bc_shift, policy: {type: bc, augmentation: shift}}``; or an existing checkpoint, evaluated as it
+    is, e.g. ``{name: my_policy, checkpoint: path/to/pretrained_model}`` (``checkpoint.py``).
 
     Attributes:
         name: Name in the results (``method`` column), e.g. ``bc_shift``.
-        policy: ``--policy.<key>=<value>`` settings for ``lerobot-train``; ``type`` is required.
+        policy: ``--policy.<key>=<value>`` settings for ``lerobot-train``; ``type`` is required (unless
+            ``checkpoint`` is given, which takes none).
+        checkpoint: A LeRobot ``pretrained_model`` folder (or a Hub model id, fetched only when the Hub can be
+            reached) to evaluate instead of training one: no collection and no training for this method. It
+            is evaluated once per task, N and widths, on the environments of the first of ``seeds`` (it has
+            no training seed), in the same cells and conditions as the trained methods.
+        obs: The observation the checkpoint was made for: ``factorworld`` (``collect.cameras`` at
+            ``collect.image_size``, 8-number state) or ``lerobot_metaworld`` (LeRobot's metaworld env:
+            docs/lerobot_metaworld.md). Trained methods always observe as their datasets do (``factorworld``).
     """
 
     name: str = "rt1_small"
-    policy: dict[str, Any] = field(default_factory=lambda: {"type": "rt1", "preset": "small"})
+    policy: dict[str, Any] = field(default_factory=dict)
+    checkpoint: str | None = None
+    obs: str = FACTORWORLD_OBS
 
     def __post_init__(self) -> None:
+        check_obs_mode(self.obs)
+        if self.checkpoint is not None:
+            if self.policy:
+                raise ValueError(
+                    f"method {self.name!r} names a checkpoint and policy settings {self.policy}: a given checkpoint "
+                    "is evaluated as it is (its settings are in its config.json); drop one"
+                )
+            self.checkpoint = checkpoint_setting(self.checkpoint)
+            return
         if "type" not in self.policy:
-            raise ValueError(f"method {self.name!r} needs policy.type (a LeRobot policy type such as bc, rt1, act)")
+            raise ValueError(
+                f"method {self.name!r} needs policy.type (a LeRobot policy type such as bc, rt1, act) or a "
+                "checkpoint (an existing pretrained_model folder)"
+            )
+        if self.obs != FACTORWORLD_OBS:
+            raise ValueError(
+                f"method {self.name!r}: obs={self.obs} applies to a given checkpoint only (a trained method observes "
+                f"as its dataset does, obs={FACTORWORLD_OBS})"
+            )
         # lerobot-train runs in the step's folder: a relative weights path must not depend on that
         self.policy = resolve_policy_paths(self.policy)
+
+    @property
+    def trains(self) -> bool:
+        """The study trains this method (it names policy settings, not a checkpoint)."""
+        return self.checkpoint is None
 
 
 def check_policy(method: MethodConfig) -> None:
@@ -314,7 +350,9 @@ class StudyConfig:
     pairs: list[str] = field(default_factory=list)
     radius_factors: list[str] = field(default_factory=list)
     radius_widths: list[str] = field(default_factory=lambda: list(WIDTHS))
-    methods: list[MethodConfig] = field(default_factory=lambda: [MethodConfig()])
+    methods: list[MethodConfig] = field(
+        default_factory=lambda: [MethodConfig("rt1_small", {"type": "rt1", "preset": "small"})]
+    )
     collect: CollectSettings = field(default_factory=CollectSettings)
     train: TrainSettings = field(default_factory=TrainSettings)
     eval: EvalSettings = field(default_factory=EvalSettings)
@@ -335,6 +373,14 @@ class StudyConfig:
         self.validate()
 
     # --- derived -----------------------------------------------------------------------------
+
+    def trained_methods(self) -> list[MethodConfig]:
+        """The methods the study trains (policy settings): they need the collections and trainings."""
+        return [m for m in self.methods if m.trains]
+
+    def given_methods(self) -> list[MethodConfig]:
+        """The methods that name an existing checkpoint: evaluated only."""
+        return [m for m in self.methods if not m.trains]
 
     def family_conditions(self) -> list[str]:
         """The task families' own conditions listed in ``factors`` (e.g. held-out phrasings / objects)."""
@@ -422,7 +468,7 @@ class StudyConfig:
         for task in self.tasks:
             check_task_support(get_task(task), [*self.train_factors, *shifted, *self.radius_factors])
         unknown = [f for f in shifted if f not in self.train_factors]
-        if unknown:
+        if unknown and self.trained_methods():  # a given checkpoint's training is not this study's
             raise ValueError(
                 f"factor(s) {unknown} are shifted but not varied in training (train_factors: {self.train_factors})"
             )
@@ -436,15 +482,19 @@ class StudyConfig:
                 raise ValueError(f"pair {pair!r} names a factor that is not in factors {shifted}")
 
     def _validate_methods(self) -> None:
-        """Each method is a valid policy, named once, with settings no other method has (one train key each)."""
-        for method in self.methods:
+        """Each method is a valid policy, named once, with settings no other method has (one train key each);
+        a given checkpoint is named once per observation, and LeRobot's observation needs Meta-World tasks."""
+        for method in self.trained_methods():
             check_policy(method)
+        if any(m.obs == LEROBOT_METAWORLD_OBS for m in self.methods):
+            for task in self.tasks:
+                check_lerobot_task(get_task(task))  # "the pick family has no LeRobot counterpart"
         names = [m.name for m in self.methods]
         if len(set(names)) != len(names):
             twice = sorted({n for n in names if names.count(n) > 1})
             raise ValueError(f"method names must be distinct: {', '.join(twice)} given more than once")
         seen: dict[str, str] = {}
-        for method in self.methods:
+        for method in self.trained_methods():
             settings = json.dumps(method.policy, sort_keys=True)
             if settings in seen:
                 raise ValueError(
@@ -452,6 +502,14 @@ class StudyConfig:
                     "they would train one checkpoint; drop one or change its settings"
                 )
             seen[settings] = method.name
+        given: dict[tuple[str, str], str] = {}
+        for method in self.given_methods():
+            same = given.setdefault((method.checkpoint, method.obs), method.name)
+            if same != method.name:
+                raise ValueError(
+                    f"methods {same!r} and {method.name!r} name the same checkpoint {method.checkpoint} with the same "
+                    f"obs={method.obs}: they would be one evaluation; drop one"
+                )
 
     def _validate_family_options(self) -> None:
         """A family's sampling option (``collect.n_objects``) is set only for tasks of families that read
@@ -510,7 +568,7 @@ class StudyConfig:
                 f"eval.episodes={ev.episodes} must be a multiple of eval.n_test_envs={ev.n_test_envs}, so that every "
                 "test environment is visited equally"
             )
-        for task in self.tasks:
+        for task in self.tasks if self.trained_methods() else ():  # demos are collected for training only
             if self.collect.demos_for(task) < max(self.n_train_envs):
                 raise ValueError(
                     f"{task}: {self.collect.demos_for(task)} demos cannot cover N={max(self.n_train_envs)} environments"

@@ -32,14 +32,16 @@ from typing import Any
 
 from ..core import provenance
 from ..core.io import atomic_write_json
+from ..envs.lerobot_obs import LEROBOT_METAWORLD_OBS
 from ..tasks import get_task
+from .checkpoint import GIVEN_CHECKPOINT, checkpoint_problems, given_evaluations, local_folder, read_policy_config
 from .config import StudyConfig
 from .executors import task_units
-from .inputs import CollectInputs, EvalInputs, TrainInputs
+from .inputs import CollectInputs, EnvInputs, EvalInputs, TrainInputs
 from .plan import Plan
 from .power import power_lines
 from .profile import finished_timings, last_run
-from .steps import KINDS, TIMINGS, Step, is_done
+from .steps import KINDS, TIMINGS, Step, evaluated, is_done
 
 COST_MODEL_FILE = Path(__file__).with_name("cost_model.json")
 # Measured separately (not refitted from a study's timings): a frozen pretrained encoder of bc adds one
@@ -48,6 +50,9 @@ COST_MODEL_FILE = Path(__file__).with_name("cost_model.json")
 # of 84 px images, one thread, no gradient, best of 3 rounds; other jobs shared the machine (load average
 # 4.3), so these may be up to 2x high.
 ENCODER_FRAME_S = {"lite0": 0.032, "r3m_rn50": 0.086, "clip_rn50": 0.115}
+# A step of --env.obs=lerobot_metaworld (480 x 480, quality full) on the 2-core machine, as docs/lerobot_metaworld.md
+# measured it (~150 ms, busy cores); not refitted by --fit_cost.
+LEROBOT_METAWORLD_STEP_S = 0.15
 FEATURE_CACHE_FRAMES = 100_000  # bc's default feature_cache_size (frames whose frozen features are kept)
 GPU_TRAIN_SPEEDUP = 30.0  # one datacentre GPU vs one CPU core for these small image policies (an assumption)
 DEFAULT_SAMPLE_S = 0.02  # a policy type the fit has not seen
@@ -77,8 +82,8 @@ def expert_episode_steps(task: str) -> int:
     return get_task(task).demo_steps
 
 
-def cameras_of(collect: CollectInputs) -> int:
-    return len([c for c in str(collect.cameras).split(",") if c.strip()])
+def cameras_of(env: CollectInputs | EnvInputs) -> int:
+    return len([c for c in str(env.cameras).split(",") if c.strip()])
 
 
 def frozen_encoder(policy: dict[str, Any]) -> str | None:
@@ -106,11 +111,14 @@ def step_cost(step: Step, plan_index: dict[str, Step], model: dict[str, Any]) ->
         collect = CollectInputs.from_dict(step.inputs)
         frames = collect.demos * expert_episode_steps(collect.task)
         return model["collect"]["fixed_s"] + frames * model["collect"]["frame_s"], 0.0
+    if step.kind == "eval" and not step.deps:  # a given checkpoint: its config says which policy it is
+        inputs = EvalInputs.from_dict(step.inputs)
+        return _eval_cost(inputs, given_policy(step), inputs.environments, model)
     collect = CollectInputs.from_dict(plan_index[step.deps[-1]].inputs)
     if step.kind == "train":
         return model["train"]["fixed_s"], _train_seconds(TrainInputs.from_dict(step.inputs), collect, model)
     train = TrainInputs.from_dict(plan_index[step.deps[0]].inputs)
-    return _eval_cost(EvalInputs.from_dict(step.inputs), train, collect, model)
+    return _eval_cost(EvalInputs.from_dict(step.inputs), train.policy, collect, model)
 
 
 def _train_seconds(train: TrainInputs, collect: CollectInputs, model: dict[str, Any]) -> float:
@@ -130,14 +138,25 @@ def episode_fraction(model: dict[str, Any], task: str) -> float:
     return fractions.get(task, fractions[DEFAULT])
 
 
+def given_policy(step: Step) -> dict[str, Any]:
+    """A given checkpoint's policy settings, from its ``config.json`` (``{}`` while it is not here)."""
+    folder = local_folder(step.run[GIVEN_CHECKPOINT])
+    return read_policy_config(folder) if folder is not None else {}
+
+
 def _eval_cost(
-    ev: EvalInputs, train: TrainInputs, collect: CollectInputs, model: dict[str, Any]
+    ev: EvalInputs, policy: dict[str, Any], env: CollectInputs | EnvInputs, model: dict[str, Any]
 ) -> tuple[float, float]:
-    horizon = ev.max_episode_steps or get_task(collect.task).max_episode_steps
-    sim_steps = ev.episodes * horizon * episode_fraction(model, collect.task)
-    cpu_s = model["eval"]["fixed_s"] + sim_steps * model["eval"]["sim_step_s"]
-    encoder = frozen_encoder(train.policy)
-    encoder_s = sim_steps * cameras_of(collect) * ENCODER_FRAME_S[encoder] if encoder else 0.0
+    """An evaluation's cost: the same model for a trained and a given checkpoint, but for a step of LeRobot's
+    observation (a 480 px frame with shadows, not the small frames the constant was fitted on)."""
+    horizon = ev.max_episode_steps or get_task(env.task).max_episode_steps
+    sim_steps = ev.episodes * horizon * episode_fraction(model, env.task)
+    step_s = model["eval"]["sim_step_s"]
+    if isinstance(env, EnvInputs) and env.obs == LEROBOT_METAWORLD_OBS:
+        step_s = max(step_s, LEROBOT_METAWORLD_STEP_S)
+    cpu_s = model["eval"]["fixed_s"] + sim_steps * step_s
+    encoder = frozen_encoder(policy)
+    encoder_s = sim_steps * cameras_of(env) * ENCODER_FRAME_S[encoder] if encoder else 0.0
     if str(ev.device).startswith("cuda"):
         return cpu_s, encoder_s
     return cpu_s + encoder_s, 0.0
@@ -202,7 +221,7 @@ def _front(ready: dict[str, deque], units: int, grouped: bool) -> list[Step]:
     seen: set[str] = set()
     for kind in reversed(KINDS):
         for step in ready[kind]:
-            unit = step.deps[0] if grouped and kind == "eval" else step.key
+            unit = evaluated(step) if grouped and kind == "eval" else step.key
             if unit not in seen:
                 if len(seen) >= units:
                     return out
@@ -259,6 +278,9 @@ def describe(cfg: StudyConfig, plan: Plan) -> str:
     missing = cfg.missing_weight_files()
     if missing:
         lines.append(f"  not startable yet, weights file(s) not found: {'; '.join(missing)}")
+    problems = checkpoint_problems(given_evaluations(plan.steps))
+    if problems:
+        lines.append(f"  not startable yet, checkpoint(s): {'; '.join(problems)}")
     return "\n".join(lines)
 
 
@@ -291,8 +313,9 @@ def fit_constants(plan: Plan, study_dir: str | Path) -> dict[str, Any]:
             n = result["steps"] * TrainInputs.from_dict(step.inputs).batch_size
             samples.setdefault(kind, []).extend([variable, n])
         else:
-            task = CollectInputs.from_dict(index[step.deps[-1]].inputs).task
             inputs = EvalInputs.from_dict(step.inputs)
+            env = inputs.environments or CollectInputs.from_dict(index[step.deps[-1]].inputs)
+            task = env.task
             horizon = inputs.max_episode_steps or get_task(task).max_episode_steps
             work["eval"] += variable
             units["eval"] += result.get("env_steps", 0)

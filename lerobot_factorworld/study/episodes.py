@@ -36,12 +36,13 @@ from ..envs.factor_env import env_index_for_seed
 from ..factors.values import SceneConfig
 from ..families import family_of
 from ..protocol.conditions import TRAIN_SUITE, evaluation_suites, fingerprint, shifted_factors
+from ..protocol.sampling import SamplingOptions
 from ..protocol.sidecar import DatasetCondition, read_dataset_condition
 from ..tasks import get_task
 from .config import StudyConfig
-from .inputs import EvalInputs
+from .inputs import EnvInputs, EvalInputs
 from .metrics import wilson_interval
-from .results import RESULTS_FILE, Evaluation, commits_of, provenance_columns
+from .results import RESULTS_FILE, Evaluation, commits_of, policy_of, provenance_columns
 from .steps import RESULT_FILE, Step, read_result, step_folder
 
 EPISODES_FILE = "episodes.parquet"
@@ -165,11 +166,10 @@ def episode_rows(
     """The rows of a study's finished ``evaluations`` (in their order), their environments rebuilt from each
     evaluation's dataset (:func:`condition_environments`); one evaluation at a time, so that a large study
     (the paper's grid: about a million episodes) is written without holding every row."""
-    policies = {m.name: m.policy["type"] for m in cfg.methods}
     rebuild = environment_rebuilder(study_dir)
     for evaluation in evaluations:
         configs = condition_environments(evaluation.step, evaluation.result, rebuild)
-        policy = policies.get(evaluation.labels["method"], "")
+        policy = policy_of(cfg, evaluation)
         yield from evaluation_episodes(
             evaluation.labels, evaluation.result, configs, study=cfg.name, policy=policy, step=evaluation.step.key
         )
@@ -187,16 +187,25 @@ def environment_rebuilder(study_dir: str | Path) -> Rebuild:
 
 
 def condition_environments(step: Step, result: Mapping[str, Any], rebuild: Rebuild) -> list[SceneConfig] | None:
-    """The environments an evaluation step ran in, rebuilt as it built them (from its dataset's side-car),
-    or ``None`` when that is not possible or gives other environments than the ones it recorded (the
-    fingerprint differs: sampling changed since, or the dataset was remade): factor values are never guessed."""
+    """The environments an evaluation step ran in, rebuilt as it built them (from its dataset's side-car, or a
+    given checkpoint's from its step's settings), or ``None`` when that is not possible or gives other
+    environments than the ones it recorded (the fingerprint differs: sampling changed since, or the dataset
+    was remade): factor values are never guessed."""
     inputs = EvalInputs.from_dict(step.inputs)
-    for key in step.deps:
-        suite = rebuild(key, step.meta["task"], inputs.condition, inputs.n_test_envs)
+    suites = [rebuild(key, step.meta["task"], inputs.condition, inputs.n_test_envs) for key in step.deps]
+    if inputs.environments is not None:
+        suites.append(_given_suite(inputs.environments, inputs.condition, inputs.n_test_envs))
+    for suite in suites:
         if suite is not None:
             configs, width = suite
             return configs if fingerprint(configs, width) == result.get("fingerprint") else None
     return None
+
+
+def _given_suite(env: EnvInputs, condition: str, n_test_envs: int | None) -> Suite | None:
+    """The environments of ``condition`` for a given checkpoint's evaluation, sampled from its settings."""
+    sampling = env.sampling_options()
+    return _condition_suite(env.task, condition, n_test_envs, env.n_envs, env.train_factors, env.seed, sampling)
 
 
 def _dataset(study_dir: Path, collect_key: str) -> DatasetCondition | None:
@@ -224,22 +233,34 @@ def _suite(
     if dataset is None:
         return None
     try:
+        train_configs = dataset.train_configs(get_task(task).name)
+    except (OSError, ValueError, KeyError):  # not a dataset this code reads (another task)
+        return None
+    return _condition_suite(
+        task, condition, n_test_envs, dataset.n_envs, dataset.factors, dataset.seed, dataset.sampling, train_configs
+    )
+
+
+def _condition_suite(
+    task: str,
+    condition: str,
+    n_test_envs: int | None,
+    n_envs: int,
+    factors: Sequence[str],
+    seed: int,
+    sampling: SamplingOptions,
+    train_configs: Sequence[SceneConfig] | None = None,
+) -> Suite | None:
+    """The environments of ``condition`` as an evaluation's env config builds them; ``None`` when this code
+    cannot build them (other factors than it knows)."""
+    try:
         name = get_task(task).name
         shifts = [] if condition == TRAIN_SUITE else [condition]
-        suites = evaluation_suites(
-            name,
-            dataset.n_envs,
-            dataset.factors,
-            shifts,
-            n_test_envs or dataset.n_envs,
-            dataset.seed,
-            dataset.sampling,
-            dataset.train_configs(name),
-        )
-    except (OSError, ValueError, KeyError):  # not a dataset this code reads (another task, other factors)
+        suites = evaluation_suites(name, n_envs, factors, shifts, n_test_envs or n_envs, seed, sampling, train_configs)
+    except (OSError, ValueError, KeyError):
         return None
     configs = suites[TRAIN_SUITE] if condition == TRAIN_SUITE else list(suites.values())[-1]
-    return configs, dataset.sampling.widths.get("object_pos")
+    return configs, sampling.widths.get("object_pos")
 
 
 # --- the file -------------------------------------------------------------------------------------

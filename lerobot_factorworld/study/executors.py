@@ -14,7 +14,7 @@ from multiprocessing import get_context
 from typing import Any, Protocol
 
 from ..core import provenance
-from .steps import Step, run_steps, warm_up
+from .steps import Step, evaluated, run_steps, warm_up
 
 
 class Executor(Protocol):
@@ -171,11 +171,11 @@ def task_units(ready: list[Step], free: int, grouped: bool) -> list[list[Step]]:
     for step in ready:
         if step.kind != "eval":
             units.append([step])
-        elif step.deps[0] in by_checkpoint:
-            by_checkpoint[step.deps[0]].append(step)
+        elif evaluated(step) in by_checkpoint:
+            by_checkpoint[evaluated(step)].append(step)
         else:
-            by_checkpoint[step.deps[0]] = [step]
-            units.append(by_checkpoint[step.deps[0]])
+            by_checkpoint[evaluated(step)] = [step]
+            units.append(by_checkpoint[evaluated(step)])
     while len(units) < free:
         largest = max(range(len(units)), key=lambda i: len(units[i]), default=None)
         if largest is None or len(units[largest]) < 2:

@@ -13,6 +13,9 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field, fields
 from typing import Any, ClassVar
 
+from ..envs.lerobot_obs import CAMERA as LEROBOT_CAMERA
+from ..envs.lerobot_obs import FACTORWORLD_OBS, LEROBOT_METAWORLD_OBS
+from ..envs.lerobot_obs import IMAGE_SIZE as LEROBOT_IMAGE_SIZE
 from ..protocol.conditions import TRAIN_SUITE
 from ..protocol.sampling import SamplingOptions
 
@@ -68,6 +71,59 @@ class CollectInputs:
     def sampling_options(self) -> SamplingOptions:
         """How the collection draws its environments; its dataset records them, and the evaluation of every
         checkpoint trained on it reads them from there (its ``train`` and shifted conditions alike)."""
+        return self.environments().sampling_options()
+
+    def environments(self, obs: str = FACTORWORLD_OBS) -> EnvInputs:
+        """The environments this collection runs in, observed as ``obs``: what a given checkpoint is evaluated
+        in, in the same cell (the same ``train`` environments, hence the same shifted ones). LeRobot's
+        observation has its own camera and image size."""
+        lerobot = obs == LEROBOT_METAWORLD_OBS
+        return EnvInputs(
+            task=self.task,
+            n_envs=self.n_envs,
+            seed=self.seed,
+            train_factors=self.train_factors,
+            obs=obs,
+            cameras=LEROBOT_CAMERA if lerobot else self.cameras,
+            image_size=LEROBOT_IMAGE_SIZE if lerobot else self.image_size,
+            n_distractors=self.n_distractors,
+            rgb_fraction=self.rgb_fraction,
+            widths=dict(self.widths),
+            family_options=dict(self.family_options),
+        )
+
+
+@dataclass(frozen=True)
+class EnvInputs:
+    """The environments of an evaluation that has no dataset (a given checkpoint): the ``train`` condition is
+    the N environments sampled as a collection with these settings would sample them, observed as ``obs``."""
+
+    OPTIONAL: ClassVar[frozenset[str]] = frozenset({"family_options"})
+
+    task: str
+    n_envs: int
+    seed: int
+    train_factors: tuple[str, ...]  # sorted, as a collection's
+    obs: str  # factorworld or lerobot_metaworld (envs/lerobot_obs.py)
+    cameras: str
+    image_size: int
+    n_distractors: int
+    rgb_fraction: float
+    widths: Mapping[str, str]
+    family_options: Mapping[str, Any] = field(default_factory=dict)
+
+    def to_dict(self) -> dict[str, Any]:
+        out = {f.name: getattr(self, f.name) for f in fields(self)}
+        out.update(train_factors=list(self.train_factors), widths=dict(self.widths))
+        out["family_options"] = dict(self.family_options)
+        return out
+
+    @classmethod
+    def from_dict(cls, data: Mapping[str, Any]) -> EnvInputs:
+        return _replace_seq(_from_dict(cls, data), "train_factors")
+
+    def sampling_options(self) -> SamplingOptions:
+        """How the environments are drawn (widths, distractors, flat-colour share, the family's options)."""
         return SamplingOptions(
             widths=dict(self.widths),
             n_distractors=self.n_distractors,
@@ -104,9 +160,11 @@ class TrainInputs:
 
 @dataclass(frozen=True)
 class EvalInputs:
-    """One condition of one checkpoint (LeRobot's evaluation)."""
+    """One condition of one checkpoint (LeRobot's evaluation): a trained one (its train step is a dependency,
+    its dataset gives the environments) or a given one (``checkpoint``, the content hash of its files, and
+    ``environments``; the step has no dependency)."""
 
-    OPTIONAL: ClassVar[frozenset[str]] = frozenset({"n_test_envs"})
+    OPTIONAL: ClassVar[frozenset[str]] = frozenset({"n_test_envs", "checkpoint", "environments"})
 
     condition: str
     episodes: int
@@ -115,17 +173,24 @@ class EvalInputs:
     device: str
     versions: Mapping[str, str]
     n_test_envs: int | None = None  # None (and not in the key) for ``train``: the dataset's own environments
+    checkpoint: str | None = None  # a given checkpoint's content hash (``checkpoint.py``); None: a trained one
+    environments: EnvInputs | None = None  # a given checkpoint's environments; None: its dataset's
 
     def __post_init__(self) -> None:
         if (self.condition == TRAIN_SUITE) != (self.n_test_envs is None):
             raise ValueError(f"n_test_envs is set for every shifted condition and only for them ({self.condition})")
+        if (self.checkpoint is None) != (self.environments is None):
+            raise ValueError("a given checkpoint's evaluation names both its checkpoint and its environments")
+        if isinstance(self.environments, Mapping):  # read back from a stored step
+            object.__setattr__(self, "environments", EnvInputs.from_dict(self.environments))
 
     def to_dict(self) -> dict[str, Any]:
+        """Optional entries left out when unset: a trained checkpoint's evaluation keeps the key it always had."""
         out = {f.name: getattr(self, f.name) for f in fields(self)}
         out["versions"] = dict(self.versions)
-        if self.n_test_envs is None:
-            del out["n_test_envs"]
-        return out
+        if self.environments is not None:
+            out["environments"] = self.environments.to_dict()
+        return {k: v for k, v in out.items() if k not in self.OPTIONAL or v is not None}
 
     @classmethod
     def from_dict(cls, data: Mapping[str, Any]) -> EvalInputs:

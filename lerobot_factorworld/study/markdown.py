@@ -97,10 +97,16 @@ def render(
         "",
         *([commit_line(rows), ""] if rows else []),
         f"- Grid: methods {', '.join(m.name for m in cfg.methods)}; tasks {', '.join(cfg.tasks)}; "
-        f"N {cfg.n_train_envs}; seeds {cfg.seeds}; {cfg.collect.demos} demos per dataset"
-        + (f" (per task: {cfg.collect.demos_per_task})" if cfg.collect.demos_per_task else "")
+        f"N {cfg.n_train_envs}; seeds {cfg.seeds}"
+        + (
+            f"; {cfg.collect.demos} demos per dataset"
+            + (f" (per task: {cfg.collect.demos_per_task})" if cfg.collect.demos_per_task else "")
+            if cfg.trained_methods()
+            else ""
+        )
         + f"; textures a flat RGB colour with probability {cfg.collect.effective_rgb_fraction:g}, else an image"
-        + f"; training {training} at batch {cfg.train.batch_size}.",
+        + (f"; training {training} at batch {cfg.train.batch_size}." if cfg.trained_methods() else "."),
+        *_given_lines(cfg, rows),
         f"- Evaluation: {ev.episodes} episodes per condition and checkpoint (episode i reset with seed "
         f"{ev.start_seed}+i in every condition, so object starts are paired), {ev.n_test_envs} test environments "
         "per shifted condition drawn from the held-out split, the N training environments for `train`.",
@@ -146,6 +152,22 @@ def commit_line(rows: Sequence[dict]) -> str:
         f"{'commit not recorded' if commit == UNKNOWN else commit} ({n} row{'s' if n != 1 else ''})"
         for commit, n in counts.items()
     )
+
+
+def _given_lines(cfg: StudyConfig, rows: list[dict]) -> list[str]:
+    """The given checkpoints (methods evaluated as they are): where they are, what they observe, and what
+    ``train`` and ``seed`` mean for them."""
+    given = cfg.given_methods()
+    if not given:
+        return []
+    policies = {r["method"]: r["policy"] for r in rows}
+    names = "; ".join(f"{m.name} (`{policies.get(m.name) or '?'}`, `{m.checkpoint}`, obs={m.obs})" for m in given)
+    return [
+        f"- Given checkpoint(s), evaluated as they are (no collection, no training): {names}. Their `train` is the "
+        f"N environments sampled varying {', '.join(cfg.train_factors) or 'no factor (the unshifted scene)'}, "
+        f"and they are evaluated at the first seed only, {cfg.seeds[0]} (it samples the environments; a given "
+        "checkpoint has no training seed)."
+    ]
 
 
 def _ordering_section(cfg: StudyConfig, rows: list[dict]) -> list[str]:

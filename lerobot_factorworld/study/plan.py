@@ -7,15 +7,17 @@ What goes into a step's inputs (hence its key) is what changes its results (``in
 from __future__ import annotations
 
 from collections import Counter
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
+from ..core.fingerprint import file_fingerprint
 from ..datasets.version import DATA_VERSION
 from ..factors.registry import get_factor
 from ..protocol.conditions import TRAIN_SUITE
-from .config import RADII_M, StudyConfig, map_arg_paths, map_policy_paths
-from .inputs import CollectInputs, EvalInputs, TrainInputs
-from .steps import RUN, Step, file_fingerprint, versions
+from .checkpoint import GIVEN_CHECKPOINT, keyed_checkpoint
+from .config import RADII_M, MethodConfig, StudyConfig, map_arg_paths, map_policy_paths
+from .inputs import CollectInputs, EnvInputs, EvalInputs, TrainInputs
+from .steps import RUN, Step, versions
 
 DEFAULT_WIDTHS = "default"
 
@@ -37,25 +39,48 @@ def widths_label(widths: dict[str, str]) -> str:
 
 
 def make_plan(cfg: StudyConfig) -> Plan:
-    """Every step of the study, deduplicated by key (a dataset is shared by all methods)."""
+    """Every step of the study, deduplicated by key (a dataset is shared by all methods). A given checkpoint
+    (``checkpoint.py``) has evaluations only, in the environments the cell's dataset has (rebuilt from the
+    same settings, never collected), at the first seed only (it has no training seed)."""
     variants: list[tuple[dict[str, str], list[str]]] = [({}, cfg.conditions())]
     variants += [({factor: width}, [factor]) for factor, width in cfg.radius_variants()]
     steps: dict[str, Step] = {}
+    keyed = {m.checkpoint: keyed_checkpoint(m.checkpoint) for m in cfg.given_methods()}  # each hashed once
     for task in cfg.tasks:
         for widths, conditions in variants:
             for n in cfg.n_train_envs:
                 for seed in cfg.seeds:
                     cell = {"task": task, "n_train_envs": n, "seed": seed, "widths": widths_label(widths)}
                     collect = _collect_step(cfg, task, n, seed, widths, cell)
-                    steps.setdefault(collect.key, collect)
+                    if cfg.trained_methods():
+                        steps.setdefault(collect.key, collect)
                     for method in cfg.methods:
-                        train = _train_step(cfg, method.policy, seed, collect, {"method": method.name, **cell})
-                        steps.setdefault(train.key, train)
-                        for condition in [TRAIN_SUITE, *conditions]:
-                            ev = _eval_step(cfg, condition, train, collect, {"method": method.name, **cell})
-                            steps.setdefault(ev.key, ev)
+                        labels = {"method": method.name, **cell}
+                        for step in _method_steps(cfg, method, seed, collect, conditions, keyed, labels):
+                            steps.setdefault(step.key, step)
     order = {"collect": 0, "train": 1, "eval": 2}
     return Plan(tuple(sorted(steps.values(), key=lambda s: order[s.kind])))
+
+
+def _method_steps(
+    cfg: StudyConfig,
+    method: MethodConfig,
+    seed: int,
+    collect: Step,
+    conditions: list[str],
+    keyed: dict[str, str],
+    labels: dict,
+) -> list[Step]:
+    """A trained method's training on ``collect``'s dataset and its evaluations; a given checkpoint's
+    evaluations in that dataset's environments, at the first seed only."""
+    conditions = [TRAIN_SUITE, *conditions]
+    if method.trains:
+        train = _train_step(cfg, method.policy, seed, collect, labels)
+        return [train, *(_eval_step(cfg, c, train, collect, labels) for c in conditions)]
+    if seed != cfg.seeds[0]:
+        return []
+    env = CollectInputs.from_dict(collect.inputs).environments(method.obs)
+    return [_given_eval_step(cfg, c, method.checkpoint, keyed, env, labels) for c in conditions]
 
 
 def _collect_step(cfg: StudyConfig, task: str, n: int, seed: int, widths: dict[str, str], cell: dict) -> Step:
@@ -102,8 +127,24 @@ def _train_step(cfg: StudyConfig, policy: dict[str, Any], seed: int, collect: St
 def _eval_step(cfg: StudyConfig, condition: str, train: Step, collect: Step, labels: dict) -> Step:
     """One condition of one checkpoint; batch size and threads do not change results (kept out of the key),
     and ``train`` (the dataset's own environments) does not depend on ``n_test_envs``."""
+    run = {"batch_size": cfg.eval.batch_size, "threads": cfg.eval.threads}
+    inputs = _eval_inputs(cfg, condition)
+    return Step("eval", inputs.to_dict(), (train.key, collect.key), {**labels, "condition": condition, RUN: run})
+
+
+def _given_eval_step(
+    cfg: StudyConfig, condition: str, checkpoint: str, keyed: dict[str, str], env: EnvInputs, labels: dict
+) -> Step:
+    """One condition of a given checkpoint: no dependency; the key holds the checkpoint's content hash
+    (``keyed``) and the environments (where the checkpoint lies travels in ``run``)."""
+    run = {"batch_size": cfg.eval.batch_size, "threads": cfg.eval.threads, GIVEN_CHECKPOINT: checkpoint}
+    inputs = replace(_eval_inputs(cfg, condition), checkpoint=keyed[checkpoint], environments=env)
+    return Step("eval", inputs.to_dict(), (), {**labels, "condition": condition, RUN: run})
+
+
+def _eval_inputs(cfg: StudyConfig, condition: str) -> EvalInputs:
     ev = cfg.eval
-    inputs = EvalInputs(
+    return EvalInputs(
         condition=condition,
         episodes=ev.episodes,
         start_seed=ev.start_seed,
@@ -112,8 +153,6 @@ def _eval_step(cfg: StudyConfig, condition: str, train: Step, collect: Step, lab
         versions=versions(),
         n_test_envs=None if condition == TRAIN_SUITE else ev.n_test_envs,
     )
-    run = {"batch_size": ev.batch_size, "threads": ev.threads}
-    return Step("eval", inputs.to_dict(), (train.key, collect.key), {**labels, "condition": condition, RUN: run})
 
 
 def _keyed_path(value: str) -> str:

@@ -22,7 +22,7 @@ from ..protocol.conditions import TRAIN_SUITE, shifted_factors
 from .config import RADIUS_FACTORS, StudyConfig
 from .metrics import paired_gap, wilson_interval
 from .plan import Plan, radius_of
-from .steps import Step, is_done, provenance_of, read_result
+from .steps import Step, evaluated, is_done, provenance_of, read_result
 
 RESULTS_FILE = "results.csv"
 STAGE_SEPARATOR = ";"  # between the stage:count items of the stages column
@@ -90,12 +90,18 @@ def finished_evaluations(plan: Plan, study_dir: str | Path) -> list[Evaluation]:
 
 def result_rows(cfg: StudyConfig, evaluations: Sequence[Evaluation]) -> list[dict]:
     """``results.csv`` rows of ``evaluations`` (in their order)."""
-    policies = {m.name: m.policy["type"] for m in cfg.methods}
-    train_outcomes = {e.step.deps[0]: e.result for e in evaluations if e.labels["condition"] == TRAIN_SUITE}
-    return [_row(cfg.name, policies, e, train_outcomes.get(e.step.deps[0])) for e in evaluations]
+    train_outcomes = {evaluated(e.step): e.result for e in evaluations if e.labels["condition"] == TRAIN_SUITE}
+    return [_row(cfg.name, policy_of(cfg, e), e, train_outcomes.get(evaluated(e.step))) for e in evaluations]
 
 
-def _row(study: str, policies: dict[str, str], evaluation: Evaluation, train: dict | None) -> dict:
+def policy_of(cfg: StudyConfig, evaluation: Evaluation) -> str:
+    """The LeRobot policy type of an evaluation: its method's ``policy.type``, or what a given checkpoint's
+    evaluation read from the checkpoint (``""`` for one made before that was recorded)."""
+    types = {m.name: m.policy.get("type") for m in cfg.methods}
+    return types.get(evaluation.labels["method"]) or evaluation.result.get("policy_type", "")
+
+
+def _row(study: str, policy: str, evaluation: Evaluation, train: dict | None) -> dict:
     res, meta = evaluation.result, evaluation.labels
     k, n = sum(res["successes"]), len(res["successes"])
     low, high = wilson_interval(k, n)
@@ -112,7 +118,7 @@ def _row(study: str, policies: dict[str, str], evaluation: Evaluation, train: di
     return {
         "study": study,
         "method": meta["method"],
-        "policy": policies.get(meta["method"], ""),
+        "policy": policy,
         "task": meta["task"],
         "n_train_envs": meta["n_train_envs"],
         "seed": meta["seed"],

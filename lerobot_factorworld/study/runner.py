@@ -22,6 +22,7 @@ from tqdm import tqdm
 
 from ..core.io import atomic_write_json
 from ..datasets.hub import check_hub_token
+from .checkpoint import check_checkpoints, fetch_checkpoints, given_evaluations
 from .config import RUN_CONFIG_FILE, StudyConfig
 from .cost import describe, fit_cost_model
 from .episodes import push_results
@@ -58,6 +59,8 @@ def run_study(cfg: StudyConfig, command: str | None = None) -> StudyOutcome | st
     Cached steps made by other code are named on stderr first (``dry_run`` too), refused under ``strict``,
     redone under ``rerun_stale`` (see the module docstring)."""
     start = time.perf_counter()
+    if not (cfg.dry_run or cfg.profile or cfg.fit_cost):
+        fetch_checkpoints([m.checkpoint for m in cfg.given_methods()])  # before planning: keys hash their files
     plan = make_plan(cfg)
     study_dir = Path(cfg.out_dir)
     if cfg.dry_run:
@@ -68,6 +71,7 @@ def run_study(cfg: StudyConfig, command: str | None = None) -> StudyOutcome | st
     if cfg.fit_cost:
         return fit_cost_model(cfg, plan, study_dir)
     cfg.check_weight_files()  # before any step runs: weights are never downloaded
+    check_checkpoints(given_evaluations(plan.steps))  # a given checkpoint that cannot run on its env: one line
     if cfg.push_to_hub:
         check_hub_token()  # before any step runs, not after hours of them
     study_dir.mkdir(parents=True, exist_ok=True)

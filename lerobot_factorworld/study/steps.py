@@ -39,8 +39,10 @@ from ..core.io import atomic_write_text
 from ..core.timing import Timings
 from ..envs.stages import STAGE_KEY
 from ..families import family_of
-from ..protocol.conditions import TRAIN_SUITE, fingerprint
+from ..protocol.conditions import fingerprint
 from ..protocol.coverage import coverage
+from .checkpoint import GIVEN_CHECKPOINT, checkpoint_folder
+from .eval_env import eval_env_config
 from .inputs import CollectInputs, EvalInputs, TrainInputs
 
 KINDS = ("collect", "train", "eval")
@@ -84,24 +86,6 @@ def _version(distribution: str, default: str) -> str:
         return default
 
 
-@functools.cache
-def _sha256(path: str, size: int, mtime_ns: int) -> str:
-    digest = hashlib.sha256()
-    with open(path, "rb") as f:
-        for block in iter(lambda: f.read(1 << 20), b""):
-            digest.update(block)
-    return digest.hexdigest()
-
-
-def file_fingerprint(path: str | Path) -> str | None:
-    """``sha256:<hex>`` of a file's content (cached per size and mtime), ``None`` when it is not a file."""
-    path = Path(path)
-    if not path.is_file():
-        return None
-    stat = path.stat()
-    return "sha256:" + _sha256(str(path.resolve()), stat.st_size, stat.st_mtime_ns)
-
-
 @dataclass(frozen=True)
 class Step:
     """One unit of work. ``inputs`` (JSON-able) and ``deps`` decide ``key``; ``meta`` only labels it."""
@@ -134,6 +118,17 @@ class Step:
     @classmethod
     def from_dict(cls, data: dict[str, Any]) -> Step:
         return cls(data["kind"], data["inputs"], tuple(data["deps"]), data.get("meta", {}))
+
+
+def evaluated(step: Step) -> str:
+    """What an evaluation step evaluates, the same for every condition of it: the key of its training step,
+    or for a given checkpoint (no dependency), a hash of the checkpoint's content and its environments. The
+    runner groups a checkpoint's evaluations by it, and the report pairs each condition with its ``train``."""
+    if step.deps:
+        return step.deps[0]
+    inputs = step.inputs
+    payload = {"checkpoint": inputs["checkpoint"], "environments": inputs["environments"]}
+    return hashlib.sha256(json.dumps(payload, sort_keys=True).encode()).hexdigest()[:16]
 
 
 def is_done(step: Step, study_dir: str | Path) -> bool:
@@ -494,25 +489,6 @@ def train_log_seconds(log: str, steps: int) -> dict[str, float]:
 # --- eval ---------------------------------------------------------------------------------------
 
 
-def eval_env_config(collect: CollectInputs, data_root: str, inputs: EvalInputs):
-    """The ``factorworld`` env config of one condition: its ``train`` condition is the dataset's."""
-    # Deliberately here: the env config subclasses LeRobot's (about 4 s to import); planning never needs it.
-    from ..adapters.env_config import FactorWorldEnvConfig  # noqa: PLC0415
-
-    is_train = inputs.condition == TRAIN_SUITE
-    n_test_envs = {} if is_train else {"n_test_envs": inputs.n_test_envs}  # train: the dataset's own
-    return FactorWorldEnvConfig(
-        task=collect.task,
-        cameras=collect.cameras,
-        image_size=collect.image_size,
-        episode_length=inputs.max_episode_steps,
-        dataset_root=data_root,
-        shifts=[] if is_train else [inputs.condition],
-        include_train=is_train,
-        **n_test_envs,
-    )
-
-
 def _run_eval(step: Step, folder: Path, deps: list[Path]) -> dict[str, Any]:
     timings, execution = _current()
     with timings.span("imports"):  # paid once per worker process: later steps find them imported
@@ -527,11 +503,14 @@ def _run_eval(step: Step, folder: Path, deps: list[Path]) -> dict[str, Any]:
 
     inputs, run = EvalInputs.from_dict(step.inputs), step.run
     torch.set_num_threads(run.get("threads", 1))
-    collect_folder = _dep_of_kind(deps, "collect")
-    collect_inputs = CollectInputs.from_dict(json.loads((collect_folder / INPUTS_FILE).read_text())["inputs"])
-    data = read_result(collect_folder)
-    checkpoint = read_result(_dep_of_kind(deps, "train"))["checkpoint"]
-    env_cfg = eval_env_config(collect_inputs, data["root"], inputs)
+    if inputs.checkpoint is not None:  # a given checkpoint, unchanged since it was planned, in its environments
+        checkpoint = str(checkpoint_folder(run[GIVEN_CHECKPOINT], inputs.checkpoint))
+        env_cfg = eval_env_config(inputs.environments, None, inputs)
+    else:  # trained on a dataset, whose own environments are the training condition
+        collect_folder = _dep_of_kind(deps, "collect")
+        collect_inputs = CollectInputs.from_dict(json.loads((collect_folder / INPUTS_FILE).read_text())["inputs"])
+        checkpoint = read_result(_dep_of_kind(deps, "train"))["checkpoint"]
+        env_cfg = eval_env_config(collect_inputs, read_result(collect_folder)["root"], inputs)
     task = env_cfg.task_names[0]
     configs = env_cfg.suites(task)[inputs.condition]
 
@@ -582,6 +561,7 @@ def _run_eval(step: Step, folder: Path, deps: list[Path]) -> dict[str, Any]:
             "equal_visits": cover.equal,
             "fingerprint": fingerprint(configs, width),
             "checkpoint": checkpoint,
+            "policy_type": policy_cfg.type,  # a given checkpoint's type is known from it only
         }
         family = family_of(task)
         if family.content_key:  # what every episode asked for (e.g. instruction, named object), for breakdowns
