@@ -434,6 +434,15 @@ def test_cli_dry_run_and_one_line_errors(tmp_path):
     assert result.returncode == 2 and "valid factors" in result.stderr
 
 
+def test_a_method_may_be_any_registered_lerobot_policy_type():
+    """LeRobot's own policy types (act, diffusion, ...) train in a study like bc and rt1; a typo names them all."""
+    from lerobot_factorworld.study.config import MethodConfig, check_policy
+
+    check_policy(MethodConfig(name="act", policy={"type": "act", "chunk_size": 10, "n_action_steps": 10}))
+    with pytest.raises(ValueError, match="unknown policy type 'actt'; valid types: act, bc, diffusion"):
+        check_policy(MethodConfig(name="typo", policy={"type": "actt"}))
+
+
 STUDY_CONFIGS = sorted(
     str(p.relative_to(ROOT / "configs" / "study")) for p in (ROOT / "configs" / "study").rglob("*.yaml")
 )

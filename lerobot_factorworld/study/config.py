@@ -164,6 +164,7 @@ def check_policy(method: MethodConfig) -> None:
     """The method's policy type exists and accepts its overrides (as ``lerobot-train`` will parse them)."""
     # Deliberately here: importing LeRobot (and the policy configs that register bc and rt1) costs seconds,
     # and only a study's validation needs it, not every importer of this module.
+    import lerobot.policies  # noqa: F401, PLC0415 - registers LeRobot's own policy types (act, diffusion, ...)
     from lerobot.configs.policies import PreTrainedConfig  # noqa: PLC0415
 
     from ..policies.bc import configuration_bc  # noqa: F401, PLC0415 - registers bc
