@@ -124,15 +124,33 @@ class MethodConfig:
         obs: The observation the checkpoint was made for: ``factorworld`` (``collect.cameras`` at
             ``collect.image_size``, 8-number state) or ``lerobot_metaworld`` (LeRobot's metaworld env:
             docs/lerobot_metaworld.md). Trained methods always observe as their datasets do (``factorworld``).
+        extra_tasks: Out-of-domain data (the paper's section 5.4): a trained method's data for a task is that
+            task's dataset plus the dataset of each of these other tasks in the same cell (same N, seed and
+            widths; a listed task equal to the cell's own is skipped, so ``[pick-place, door-open]`` gives each
+            of the two tasks the other's demos). In-task demos and gradient steps stay those of the same method
+            without extra tasks (``train.epochs`` counts the task's own frames), so only the data's composition
+            changes. Meta-World tasks only (the datasets must share their features).
+        extra_demos: Demos of each extra task (``None``: ``collect.demos`` for it, so the datasets are the ones
+            those tasks' own cells use, collected once).
     """
 
     name: str = "rt1_small"
     policy: dict[str, Any] = field(default_factory=dict)
     checkpoint: str | None = None
     obs: str = FACTORWORLD_OBS
+    extra_tasks: list[str] = field(default_factory=list)
+    extra_demos: int | None = None
 
     def __post_init__(self) -> None:
         check_obs_mode(self.obs)
+        if self.checkpoint is not None and (self.extra_tasks or self.extra_demos is not None):
+            raise ValueError(
+                f"method {self.name!r}: extra_tasks / extra_demos add training data; a given checkpoint is not trained"
+            )
+        for task in self.extra_tasks:
+            check_extra_task(self.name, task)
+        if self.extra_demos is not None and self.extra_demos < 1:
+            raise ValueError(f"method {self.name!r}: extra_demos must be at least 1, got {self.extra_demos}")
         if self.checkpoint is not None:
             if self.policy:
                 raise ValueError(
@@ -154,10 +172,28 @@ class MethodConfig:
         # lerobot-train runs in the step's folder: a relative weights path must not depend on that
         self.policy = resolve_policy_paths(self.policy)
 
+    def extra_tasks_for(self, task: str) -> list[str]:
+        """The other tasks whose demos join ``task``'s training data (``extra_tasks`` without ``task``)."""
+        return [t for t in self.extra_tasks if t != task]
+
     @property
     def trains(self) -> bool:
         """The study trains this method (it names policy settings, not a checkpoint)."""
         return self.checkpoint is None
+
+
+def check_extra_task(method: str, task: str, role: str = "extra task") -> None:
+    """An out-of-domain task (or a task that gets one: ``role``) exists and is a plain Meta-World task: their
+    datasets are merged, which needs the same features."""
+    try:
+        get_task(task)
+    except ValueError as err:  # "unknown task 'x'; valid tasks: ..."
+        raise ValueError(f"method {method!r}: extra_tasks: {err}") from None
+    if family_of(task).name:  # "" for plain Meta-World tasks
+        raise ValueError(
+            f"method {method!r}: {role} {task!r} is of the {family_of(task).name} family, whose datasets have other "
+            "features than Meta-World tasks'; extra_tasks joins Meta-World tasks only"
+        )
 
 
 def check_policy(method: MethodConfig) -> None:
@@ -494,12 +530,17 @@ class StudyConfig:
         if len(set(names)) != len(names):
             twice = sorted({n for n in names if names.count(n) > 1})
             raise ValueError(f"method names must be distinct: {', '.join(twice)} given more than once")
+        for method in self.trained_methods():
+            for task in self.tasks if method.extra_tasks else ():
+                check_extra_task(method.name, task, "with extra_tasks, task")
         seen: dict[str, str] = {}
         for method in self.trained_methods():
-            settings = json.dumps(method.policy, sort_keys=True)
+            data = {"extra_tasks": sorted(method.extra_tasks), "extra_demos": method.extra_demos}
+            settings = json.dumps({"policy": method.policy, **data}, sort_keys=True)
             if settings in seen:
                 raise ValueError(
-                    f"methods {seen[settings]!r} and {method.name!r} have the same policy settings {method.policy}: "
+                    f"methods {seen[settings]!r} and {method.name!r} have the same policy settings {method.policy} "
+                    "and training data: "
                     "they would train one checkpoint; drop one or change its settings"
                 )
             seen[settings] = method.name

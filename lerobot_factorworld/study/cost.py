@@ -114,9 +114,10 @@ def step_cost(step: Step, plan_index: dict[str, Step], model: dict[str, Any]) ->
     if step.kind == "eval" and not step.deps:  # a given checkpoint: its config says which policy it is
         inputs = EvalInputs.from_dict(step.inputs)
         return _eval_cost(inputs, given_policy(step), inputs.environments, model)
-    collect = CollectInputs.from_dict(plan_index[step.deps[-1]].inputs)
-    if step.kind == "train":
+    if step.kind == "train":  # its steps count the task's own frames (deps[0]), whatever other tasks add
+        collect = CollectInputs.from_dict(plan_index[step.deps[0]].inputs)
         return model["train"]["fixed_s"], _train_seconds(TrainInputs.from_dict(step.inputs), collect, model)
+    collect = CollectInputs.from_dict(plan_index[step.deps[-1]].inputs)
     train = TrainInputs.from_dict(plan_index[step.deps[0]].inputs)
     return _eval_cost(EvalInputs.from_dict(step.inputs), train.policy, collect, model)
 

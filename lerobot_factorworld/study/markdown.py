@@ -107,6 +107,7 @@ def render(
         + f"; textures a flat RGB colour with probability {cfg.collect.effective_rgb_fraction:g}, else an image"
         + (f"; training {training} at batch {cfg.train.batch_size}." if cfg.trained_methods() else "."),
         *_given_lines(cfg, rows),
+        *_extra_data_lines(cfg),
         f"- Evaluation: {ev.episodes} episodes per condition and checkpoint (episode i reset with seed "
         f"{ev.start_seed}+i in every condition, so object starts are paired), {ev.n_test_envs} test environments "
         "per shifted condition drawn from the held-out split, the N training environments for `train`.",
@@ -152,6 +153,20 @@ def commit_line(rows: Sequence[dict]) -> str:
         f"{'commit not recorded' if commit == UNKNOWN else commit} ({n} row{'s' if n != 1 else ''})"
         for commit, n in counts.items()
     )
+
+
+def _extra_data_lines(cfg: StudyConfig) -> list[str]:
+    """The methods trained with other tasks' demos joined to each task's (``extra_tasks``)."""
+    lines = []
+    for m in cfg.trained_methods():
+        if m.extra_tasks:
+            demos = f"{m.extra_demos} demos each" if m.extra_demos else "as many demos as those tasks' own datasets"
+            lines.append(
+                f"- Out-of-domain data: {m.name} trains on each task's dataset plus the datasets of "
+                f"{', '.join(m.extra_tasks)} (other than the task itself) in the same cell, {demos}; its in-task "
+                "demos and gradient steps are those of the same method without them."
+            )
+    return lines
 
 
 def _given_lines(cfg: StudyConfig, rows: list[dict]) -> list[str]:

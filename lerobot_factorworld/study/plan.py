@@ -75,8 +75,11 @@ def _method_steps(
     evaluations in that dataset's environments, at the first seed only."""
     conditions = [TRAIN_SUITE, *conditions]
     if method.trains:
-        train = _train_step(cfg, method.policy, seed, collect, labels)
-        return [train, *(_eval_step(cfg, c, train, collect, labels) for c in conditions)]
+        extras = [
+            _extra_collect_step(cfg, method, extra, collect) for extra in method.extra_tasks_for(collect.meta["task"])
+        ]
+        train = _train_step(cfg, method.policy, seed, collect, labels, extras)
+        return [*extras, train, *(_eval_step(cfg, c, train, collect, labels) for c in conditions)]
     if seed != cfg.seeds[0]:
         return []
     env = CollectInputs.from_dict(collect.inputs).environments(method.obs)
@@ -106,8 +109,23 @@ def _collect_step(cfg: StudyConfig, task: str, n: int, seed: int, widths: dict[s
     return Step("collect", inputs.to_dict(), (), {**cell, RUN: {"workers": c.workers}})
 
 
-def _train_step(cfg: StudyConfig, policy: dict[str, Any], seed: int, collect: Step, labels: dict) -> Step:
-    """Training of one method on one dataset; weight files enter the key by content, not by location."""
+def _extra_collect_step(cfg: StudyConfig, method: MethodConfig, task: str, collect: Step) -> Step:
+    """Another task's dataset in ``collect``'s cell (same N, seed, widths and collection settings): out-of-domain
+    data for ``method``. With the default demos it is that task's own dataset in the cell (one key, collected once)."""
+    inputs = replace(
+        CollectInputs.from_dict(collect.inputs),
+        task=task,
+        demos=method.extra_demos or cfg.collect.demos_for(task),
+        family_options=cfg.collect.family_options_for(task),
+    )
+    return Step("collect", inputs.to_dict(), (), {**collect.meta, "task": task})
+
+
+def _train_step(
+    cfg: StudyConfig, policy: dict[str, Any], seed: int, collect: Step, labels: dict, extras: list[Step]
+) -> Step:
+    """Training of one method on one dataset (with ``extras``: merged with other tasks' datasets; the task's
+    own comes first in ``deps``); weight files enter the key by content, not by location."""
     t = cfg.train
     inputs = TrainInputs(
         policy=keyed_policy(policy),
@@ -121,7 +139,7 @@ def _train_step(cfg: StudyConfig, policy: dict[str, Any], seed: int, collect: St
         versions=versions(),
     )
     run = {"policy": policy, "extra_args": list(t.extra_args)}
-    return Step("train", inputs.to_dict(), (collect.key,), {**labels, RUN: run})
+    return Step("train", inputs.to_dict(), (collect.key, *(e.key for e in extras)), {**labels, RUN: run})
 
 
 def _eval_step(cfg: StudyConfig, condition: str, train: Step, collect: Step, labels: dict) -> Step:

@@ -39,6 +39,7 @@ COMPONENTS = {
         "startup_save": "process start and imports (subprocess), dataset and policy set-up, checkpoint",
         "data": "data loading (LeRobot's data_s x steps)",
         "update": "forward, backward, optimizer (LeRobot's updt_s x steps)",
+        "merge": "merging the task's dataset with other tasks' (extra_tasks)",
     },
     "eval": {
         "imports": "imports in the worker (paid once per worker process)",

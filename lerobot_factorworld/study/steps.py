@@ -37,6 +37,7 @@ from .. import __version__  # the package root registers the env and policy type
 from ..core import provenance
 from ..core.io import atomic_write_text
 from ..core.timing import Timings
+from ..datasets.merge import merge_datasets
 from ..envs.stages import STAGE_KEY
 from ..families import family_of
 from ..protocol.conditions import fingerprint
@@ -51,6 +52,7 @@ RESULT_FILE = "result.json"
 INPUTS_FILE = "step.json"
 LOG_FILE = "log.txt"
 DATA_DIR = "data"
+MERGED_DATA_DIR = "merged_data"  # a training step's own dataset when other tasks' data joins the task's
 TRAIN_DIR = "train"
 CHECKPOINT = "checkpoints/last/pretrained_model"
 RUN = "run"  # meta entry: how to run a step, without changing its results (not in the key, not in labels)
@@ -373,11 +375,15 @@ def train_steps(inputs: TrainInputs, frames: int) -> int:
 
 def _run_train(step: Step, folder: Path, deps: list[Path]) -> dict[str, Any]:
     timings, execution = _current()
-    data = read_result(_dep_of_kind(deps, "collect"))
+    datasets = [read_result(d) for d in deps if d.parent.name == "collect"]  # the task's own first
+    data = datasets[0]
     inputs = TrainInputs.from_dict(step.inputs)
     policy = step.run.get("policy", inputs.policy)  # absolute paths; the key holds their content hashes
     extra_args = step.run.get("extra_args", list(inputs.extra_args))
-    steps = train_steps(inputs, data["frames"])
+    steps = train_steps(inputs, data["frames"])  # other tasks' data (extra_tasks) changes the mix, not the steps
+    if len(datasets) > 1:
+        with timings.span("merge"):
+            data = _merged_training_data(datasets, folder, step.key)
     out = folder / TRAIN_DIR
     if out.exists():  # an interrupted run: LeRobot refuses an existing output_dir, start over
         shutil.rmtree(out)
@@ -416,6 +422,13 @@ def _run_train(step: Step, folder: Path, deps: list[Path]) -> dict[str, Any]:
     # what is left: process start and imports (subprocess), dataset and policy set-up, checkpoint saving
     timings.add("startup_save", time.perf_counter() - start - sum(logged.values()) - timings.seconds.get("imports", 0))
     return {"checkpoint": str(checkpoint), "steps": steps}
+
+
+def _merged_training_data(datasets: list[dict[str, Any]], folder: Path, key: str) -> dict[str, Any]:
+    """The task's dataset and the extra tasks' merged into ``<step>/merged_data`` (reused once complete)."""
+    root, repo_id = folder / MERGED_DATA_DIR, f"local/factorworld_{key}_merged"
+    frames = merge_datasets([(d["repo_id"], Path(d["root"])) for d in datasets], repo_id, root)
+    return {"repo_id": repo_id, "root": str(root), "frames": frames}
 
 
 def _train_subprocess(cmd: list[str], folder: Path, threads: int) -> None:
