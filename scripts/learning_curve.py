@@ -14,6 +14,10 @@ The loss column is the last training loss LeRobot logged at or before the checkp
 rounded, e.g. ``step:2K``, so it is read from the log's order, one line per ``log_freq`` steps).
 
     MUJOCO_GL=egl .venv/bin/python scripts/learning_curve.py --task pick-place --demos 200 --epochs 40 --every 10
+
+``--report`` runs nothing: it rewrites ``curve.md`` and ``curve.png`` from the ``curve.csv`` and ``settings.json``
+in ``--out`` alone (a committed curve under ``docs/results/curves/`` regenerates the table docs/findings.md
+quotes; ``tests/test_docs_results.py`` checks it).
 """
 
 from __future__ import annotations
@@ -87,7 +91,8 @@ def evaluate(args: argparse.Namespace, checkpoint: Path, out: Path, log: Path) -
     if not info.is_file():
         run([str(BIN / "lerobot-eval"), f"--policy.path={checkpoint}", "--env.type=factorworld",
              f"--env.task={args.task}", f"--env.n_train_envs={args.n}", f"--eval.n_episodes={args.episodes}",
-             "--eval.batch_size=1", f"--seed={args.seed}", f"--output_dir={out}"], log)  # fmt: skip
+             f"--env.episode_length={args.max_episode_steps}", "--eval.batch_size=1", f"--seed={args.seed}",
+             f"--output_dir={out}"], log)  # fmt: skip
     data = json.loads(info.read_text())
     return [bool(s) for task in data["per_task"] for s in task["metrics"]["successes"]]
 
@@ -106,7 +111,7 @@ def at_or_before(losses: dict[int, float], step: int) -> float:
 
 def check_settings(args: argparse.Namespace, out: Path) -> None:
     """Refuse to mix a run's cached dataset, checkpoints or evaluations with other settings (one line)."""
-    path, settings = out / "settings.json", {k: v for k, v in vars(args).items() if k != "out"}
+    path, settings = out / "settings.json", {k: v for k, v in vars(args).items() if k not in ("out", "report")}
     if path.is_file():
         old = json.loads(path.read_text())
         diff = {k: (old.get(k), v) for k, v in settings.items() if old.get(k) != v}
@@ -114,6 +119,30 @@ def check_settings(args: argparse.Namespace, out: Path) -> None:
             changes = ", ".join(f"{k}: {a} -> {b}" for k, (a, b) in diff.items())
             raise SystemExit(f"error: {out} holds a run with other settings ({changes}); choose another --out")
     path.write_text(json.dumps(settings, indent=1, sort_keys=True))
+
+
+def curve_title(settings: dict) -> str:
+    """The curve's settings in one line (from the command line, or a run's ``settings.json``)."""
+    return (f"{settings['task']}, N = {settings['n']}, {settings['demos']} demos, batch {settings['batch_size']}, "
+            f"{settings['augmentation']}, action noise {settings['action_noise']:g}")  # fmt: skip
+
+
+def read_rows(path: Path) -> list[dict]:
+    """``curve.csv``'s rows with their numbers parsed."""
+    with open(path, newline="") as f:
+        rows = list(csv.DictReader(f))
+    ints = {"steps", "successes", "episodes"}
+    return [{k: int(v) if k in ints else float(v) for k, v in row.items()} for row in rows]
+
+
+def report(out: Path) -> str:
+    """Rewrite ``curve.md`` and ``curve.png`` from ``out``'s ``curve.csv`` and ``settings.json``; the table."""
+    for name in ("curve.csv", "settings.json"):
+        if not (out / name).is_file():
+            raise SystemExit(f"error: --report needs {out / name} (a finished run's folder)")
+    return write_outputs(
+        read_rows(out / "curve.csv"), out, curve_title(json.loads((out / "settings.json").read_text()))
+    )
 
 
 def write_outputs(rows: list[dict], out: Path, title: str) -> str:
@@ -158,9 +187,14 @@ def main() -> None:
     parser.add_argument("--threads", type=int, default=1)
     parser.add_argument("--episodes", type=int, default=60)
     parser.add_argument("--seed", type=int, default=1000)
+    parser.add_argument("--max_episode_steps", type=int, default=200, help="evaluation step limit (the studies')")
     parser.add_argument("--train_arg", action="append", default=[], help="another lerobot-train flag")
     parser.add_argument("--out", default="")
+    parser.add_argument("--report", action="store_true", help="run nothing: curve.md/png from --out's curve.csv")
     args = parser.parse_args()
+    if args.report:
+        print(report(Path(args.out or f"outputs/curves/{args.task}")))
+        return
     check_tasks(parser, args.task)
     if not 0 < args.every <= args.epochs:
         raise SystemExit(f"error: --every must be in (0, --epochs={args.epochs:g}], got {args.every:g}")
@@ -186,9 +220,7 @@ def main() -> None:
         rows.append({"epochs": epochs, "steps": steps, "successes": k, "episodes": n, "success_rate": k / n,
                      "ci_low": low, "ci_high": high, "loss": at_or_before(losses, steps)})  # fmt: skip
         print(f"{epochs:g} epochs: {k}/{n}", flush=True)
-    title = (f"{args.task}, N = {args.n}, {args.demos} demos ({frames} frames), batch {args.batch_size}, "
-             f"{args.augmentation}, noise {args.action_noise:g}")  # fmt: skip
-    print(write_outputs(rows, out, title))
+    print(write_outputs(rows, out, curve_title(vars(args))))
     print(f"wall time: {time.perf_counter() - start:.0f} s (training done at {trained - start:.0f} s)")
 
 
