@@ -252,12 +252,18 @@ workers: 2
 """
 
 
-def _toy_config(out: Path, executor: str = "local"):
+def _toy_config(
+    out: Path, executor: str = "local", n_train_envs: str = "[1, 2]", factors: str = "[light, table_texture]"
+):
+    """The toy study's settings in ``out``; ``n_train_envs`` and ``factors`` (YAML lists) narrow it to a part of
+    its plan."""
     from lerobot_factorworld.core.settings import parse_config
     from lerobot_factorworld.study.config import StudyConfig
 
     path = out.parent / f"{out.name}.yaml"
-    path.write_text(TOY.format(out=out, executor=executor))
+    text = TOY.format(out=out, executor=executor)
+    text = text.replace("n_train_envs: [1, 2]\n", f"n_train_envs: {n_train_envs}\n")
+    path.write_text(text.replace("\nfactors: [light, table_texture]\n", f"\nfactors: {factors}\n"))
     return parse_config(StudyConfig, [f"--config_path={path}"], "study"), path
 
 
@@ -393,22 +399,34 @@ def test_dataset_gives_the_training_condition_and_mismatches_are_refused(toy):
 
 @TOY_GROUP
 @pytest.mark.slow
-def test_the_same_plan_on_a_local_ray_instance_gives_the_same_results(toy, tmp_path):
+def test_a_plan_on_a_local_ray_instance_gives_the_same_results(toy, tmp_path):
+    """The smallest part of the toy's plan (N = 1, the light factor: one collection, one training, two
+    evaluations, every key one of the toy's) run again on Ray: the same rows, results and weights."""
     pytest.importorskip("ray")
+    import csv
+
     from lerobot_factorworld.study.plan import make_plan
     from lerobot_factorworld.study.runner import run_study
     from lerobot_factorworld.study.steps import read_result
 
     cfg, local = toy
-    ray_cfg, _ = _toy_config(tmp_path / "toy", executor="ray")
+    ray_cfg, _ = _toy_config(tmp_path / "toy", executor="ray", n_train_envs="[1]", factors="[light]")
+    plan = make_plan(ray_cfg)
+    assert [s.kind for s in plan.steps] == ["collect", "train", "eval", "eval"]
+    assert {s.key for s in plan.steps} <= {s.key for s in make_plan(cfg).steps}
     outcome = run_study(ray_cfg, command="ray")
     assert not outcome.failed, outcome.failed
-    assert outcome.ran == local.ran
-    assert filecmp.cmp(outcome.results, local.results, shallow=False)
-    for step in make_plan(cfg).of_kind("train"):  # the same weights, not only the same (toy) outcomes
-        weights = Path(read_result(step, cfg.out_dir)["checkpoint"]) / "model.safetensors"
-        on_ray = Path(read_result(step, ray_cfg.out_dir)["checkpoint"]) / "model.safetensors"
-        assert filecmp.cmp(weights, on_ray, shallow=False)
+    assert outcome.ran == {"collect": 1, "train": 1, "eval": 2}
+    rows, local_rows = list(csv.DictReader(open(outcome.results))), list(csv.DictReader(open(local.results)))
+    assert len(rows) == 2 and all(row in local_rows for row in rows)  # the same code: provenance columns too
+    for step in plan.steps:
+        on_ray, here = read_result(step, ray_cfg.out_dir), read_result(step, cfg.out_dir)
+        if step.kind == "eval":
+            outcomes = ("successes", "stages", "lengths")
+            assert [on_ray[k] for k in outcomes] == [here[k] for k in outcomes]
+        if step.kind == "train":  # the same weights, not only the same (toy) outcomes
+            weights = Path(here["checkpoint"]) / "model.safetensors"
+            assert filecmp.cmp(weights, Path(on_ray["checkpoint"]) / "model.safetensors", shallow=False)
 
 
 # --- command line -------------------------------------------------------------------------------

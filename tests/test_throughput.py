@@ -13,7 +13,7 @@ from pathlib import Path
 
 from lerobot_factorworld.core.timing import Timings
 from lerobot_factorworld.study.config import StudyConfig
-from lerobot_factorworld.study.executors import task_units
+from lerobot_factorworld.study.executors import can_fork, lend_idle_workers, task_units
 from lerobot_factorworld.study.plan import make_plan
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -62,6 +62,33 @@ def test_grouped_tasks_hold_one_checkpoints_evaluations_and_split_for_idle_worke
     assert sorted(len(u) for u in task_units(evals[:3], 2, grouped=True)) == [1, 2]
     mixed = task_units([*evals[:3], *plan.of_kind("train")], 1, grouped=True)
     assert [len(u) for u in mixed] == [3, 1, 1]
+
+
+def test_idle_workers_are_lent_to_a_collection_without_changing_its_key(tmp_path):
+    plan = make_plan(_cfg(tmp_path))
+    collects, trains = plan.of_kind("collect"), plan.of_kind("train")
+    (alone,) = task_units(collects[:1], 3, grouped=True)  # two workers idle: the collection gets them
+    assert alone[0].key == collects[0].key and alone[0].run["workers"] == 1 + 2
+    assert collects[0].run.get("workers", 1) == 1  # the plan's step is left as it was
+    both = task_units(collects, 3, grouped=True)  # one idle worker: to the first collection
+    assert [u[0].run["workers"] for u in both] == [2, 1]
+    mixed = task_units([*trains[:1], *collects[:1]], 2, grouped=True)  # every worker busy: nothing to lend
+    assert [u[0].run.get("workers", 1) for u in mixed] == [1, 1]
+    assert lend_idle_workers([[trains[0]]], 2) == [[trains[0]]]  # only collections take more processes
+    assert task_units(collects[:1], 3, grouped=False)[0][0].run.get("workers", 1) == 1  # per_step: as planned
+
+
+def test_a_process_with_another_thread_is_not_forked():
+    import threading
+
+    stop = threading.Event()
+    thread = threading.Thread(target=stop.wait)
+    thread.start()
+    try:
+        assert not can_fork()
+    finally:
+        stop.set()
+        thread.join()
 
 
 def test_profile_and_cost_fit_read_the_steps_timings(tmp_path, monkeypatch):

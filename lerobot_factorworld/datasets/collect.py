@@ -239,7 +239,7 @@ def collect(cfg: CollectConfig) -> CollectReport:
     for stale in parts.glob("*.tmp"):  # a job interrupted by a crash: redo it from scratch
         shutil.rmtree(stale)
     total = sum(len(job.demo_indices) for job in todo)
-    workers = cfg.workers or os.cpu_count() or 1
+    workers = max(1, min(cfg.workers or os.cpu_count() or 1, len(todo)))  # a process per job at most
     errors: dict[str, str] = {}
     if todo:
         settings = asdict(cfg)

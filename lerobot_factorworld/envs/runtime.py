@@ -18,6 +18,7 @@ import numpy as np
 
 from ..factors.values import FactorValues, SceneConfig
 from ..scene.build import build_spec, resting_height_shift, robot_frame_offset
+from ..scene.renderer import SharedContextRenderer
 from ..tasks import TaskSpec
 from .metaworld import make_metaworld_env, reset_metaworld
 
@@ -48,7 +49,7 @@ class CompiledScene:
         self.env = self.make_env(self.model)
         self.rest_shift = resting_height_shift(task, factors)
         self.robot_offset = robot_frame_offset(factors)
-        self._renderer: mujoco.Renderer | None = None
+        self._renderer: SharedContextRenderer | None = None
         self.metaworld_obs: np.ndarray | None = None
 
     def edit_spec(self, spec: mujoco.MjSpec, factors: FactorValues) -> None:
@@ -72,7 +73,8 @@ class CompiledScene:
         if self._renderer is None:
             global _GL_CONTEXTS_CREATED
             h, w = self.image_size
-            self._renderer = mujoco.Renderer(self.model, height=h, width=w)
+            # one GL context per thread for every scene: a new one per scene cost ~0.3 s (scene/renderer.py)
+            self._renderer = SharedContextRenderer(self.model, height=h, width=w)
             _GL_CONTEXTS_CREATED = True
         frames = {}
         for cam in self.cameras:

@@ -1,0 +1,78 @@
+"""Scenes share one GL context per thread (``scene/renderer.py``): the frames are mujoco.Renderer's, bit for bit,
+with several models' renderers alive at once, drawn in turn, closed and replaced."""
+
+from __future__ import annotations
+
+import threading
+
+import mujoco
+import numpy as np
+
+from lerobot_factorworld.protocol.sampling import sample_configs
+from lerobot_factorworld.scene.build import build_model
+from lerobot_factorworld.scene.renderer import SharedContextRenderer, shared_gl_context
+
+SIZE = 64
+
+
+def _scenes() -> list[tuple[mujoco.MjModel, mujoco.MjData]]:
+    """Three door-open scenes that differ in every drawn thing a renderer uploads (textures, lights, camera)."""
+    configs = sample_configs("door-open", 3, 0, "train", ["camera_pos", "table_texture", "light"])
+    scenes = []
+    for config in configs:
+        model = build_model("door-open", config.factors)
+        data = mujoco.MjData(model)
+        mujoco.mj_forward(model, data)
+        scenes.append((model, data))
+    return scenes
+
+
+def _frames(make, scenes, cameras=("front", "corner")) -> list[np.ndarray]:
+    """Every scene through every camera, twice, all renderers alive and drawn in turn; then one closed and a
+    new one made in its place."""
+    renderers = [make(model) for model, _ in scenes]
+    frames = []
+    for _ in range(2):
+        for renderer, (_, data) in zip(renderers, scenes, strict=True):
+            for camera in cameras:
+                renderer.update_scene(data, camera=camera)
+                frames.append(renderer.render().copy())
+    renderers[0].close()
+    renderers[0] = make(scenes[0][0])
+    renderers[0].update_scene(scenes[0][1], camera=cameras[0])
+    frames.append(renderers[0].render().copy())
+    for renderer in renderers:
+        renderer.close()
+    return frames
+
+
+def test_shared_context_frames_are_mujoco_renderers_frames_bit_for_bit():
+    scenes = _scenes()
+    reference = _frames(lambda model: mujoco.Renderer(model, SIZE, SIZE), scenes)
+    shared = _frames(lambda model: SharedContextRenderer(model, SIZE, SIZE), scenes)
+    assert len(shared) == len(reference) == 13
+    assert len({frame.tobytes() for frame in reference}) == 6  # 3 scenes x 2 cameras, all different
+    for i, (got, want) in enumerate(zip(shared, reference, strict=True)):
+        np.testing.assert_array_equal(got, want, err_msg=f"frame {i}")
+
+
+def test_one_context_per_thread_and_a_closed_renderer_refuses_to_draw():
+    here = shared_gl_context(SIZE, SIZE)
+    assert shared_gl_context(SIZE, SIZE) is here
+    other = []
+    thread = threading.Thread(target=lambda: other.append(shared_gl_context(SIZE, SIZE)))
+    thread.start()
+    thread.join()
+    assert other[0] is not here
+    model, data = _scenes()[0]
+    renderer = SharedContextRenderer(model, SIZE, SIZE)
+    renderer.update_scene(data, camera="front")
+    assert renderer.render().shape == (SIZE, SIZE, 3)
+    renderer.close()
+    renderer.close()  # twice is harmless
+    try:
+        renderer.render()
+    except RuntimeError as err:
+        assert "after close" in str(err)
+    else:
+        raise AssertionError("a closed renderer drew a frame")
