@@ -41,6 +41,7 @@ PUBLISHED = {
     "quick": ROOT / "docs" / "study.md",
     "two_tasks": ROOT / "docs" / "study.md",
     "pick": ROOT / "docs" / "pick.md",
+    "f1_pick-place_seed0": ROOT / "docs" / "findings.md",
 }  # committed studies and a page that must quote them
 
 
