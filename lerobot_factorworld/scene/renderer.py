@@ -7,7 +7,7 @@ condition, so an evaluation paid that for every environment it showed the policy
 keeps a new ``MjrContext`` per model (its meshes, textures and offscreen framebuffer, exactly what
 ``mujoco.Renderer`` uploads) in a context that lives as long as the thread, and selects its own
 framebuffer before every frame (``mjr_render`` draws into whichever one is bound). Frames are bit-identical
-to ``mujoco.Renderer``'s (``tests/test_render_lod.py`` checks, interleaving several models).
+to ``mujoco.Renderer``'s (``tests/test_renderer.py`` checks, interleaving several models).
 """
 
 from __future__ import annotations

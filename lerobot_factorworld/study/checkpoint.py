@@ -17,10 +17,9 @@ import json
 import logging
 import os
 import re
-from collections.abc import Iterable
 from dataclasses import replace
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import huggingface_hub
 
@@ -29,10 +28,7 @@ from ..core.settings import one_line
 from ..datasets.hub import HubUnreachableError, check_hub_reachable
 from ..envs.lerobot_obs import FACTORWORLD_OBS, LEROBOT_METAWORLD_OBS
 from .eval_env import env_config
-from .inputs import EnvInputs, EvalInputs
-
-if TYPE_CHECKING:  # steps imports this module (an evaluation checks its checkpoint's content)
-    from .steps import Step
+from .inputs import EnvInputs
 
 CONFIG_FILE = "config.json"
 # What lerobot-train writes into <output_dir>/checkpoints/<step>/pretrained_model and lerobot-eval loads.
@@ -240,13 +236,3 @@ def _hint(expected: dict[str, tuple[str, tuple[int, ...]]], env: EnvInputs) -> s
     if cameras and len(cameras) == len(images) and len(sizes) == 1:
         return f": it was made for obs={FACTORWORLD_OBS}, cameras={','.join(cameras)}, image_size={sizes.pop()}"
     return ""
-
-
-def given_evaluations(steps: Iterable[Step]) -> list[tuple[str, str, EnvInputs]]:
-    """(method name, checkpoint, environments) of the given checkpoints' evaluation steps among ``steps``."""
-    out = []
-    for step in steps:
-        if step.kind == "eval" and GIVEN_CHECKPOINT in step.run:
-            inputs = EvalInputs.from_dict(step.inputs)
-            out.append((step.meta["method"], step.run[GIVEN_CHECKPOINT], inputs.environments))
-    return out

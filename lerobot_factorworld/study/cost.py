@@ -34,7 +34,7 @@ from ..core import provenance
 from ..core.io import atomic_write_json
 from ..envs.lerobot_obs import LEROBOT_METAWORLD_OBS
 from ..tasks import get_task
-from .checkpoint import GIVEN_CHECKPOINT, checkpoint_problems, given_evaluations, local_folder, read_policy_config
+from .checkpoint import GIVEN_CHECKPOINT, checkpoint_problems, local_folder, read_policy_config
 from .config import StudyConfig
 from .executors import task_units
 from .inputs import CollectInputs, EnvInputs, EvalInputs, TrainInputs
@@ -279,7 +279,7 @@ def describe(cfg: StudyConfig, plan: Plan) -> str:
     missing = cfg.missing_weight_files()
     if missing:
         lines.append(f"  not startable yet, weights file(s) not found: {'; '.join(missing)}")
-    problems = checkpoint_problems(given_evaluations(plan.steps))
+    problems = checkpoint_problems(plan.given_evaluations())
     if problems:
         lines.append(f"  not startable yet, checkpoint(s): {'; '.join(problems)}")
     return "\n".join(lines)

@@ -32,6 +32,15 @@ class Plan:
     def counts(self) -> Counter:
         return Counter(s.kind for s in self.steps)
 
+    def given_evaluations(self) -> list[tuple[str, str, EnvInputs]]:
+        """(method name, checkpoint, environments) of every given checkpoint's evaluation step (what
+        ``checkpoint.check_checkpoints`` checks before any work)."""
+        return [
+            (s.meta["method"], s.run[GIVEN_CHECKPOINT], EvalInputs.from_dict(s.inputs).environments)
+            for s in self.of_kind("eval")
+            if GIVEN_CHECKPOINT in s.run
+        ]
+
 
 def widths_label(widths: dict[str, str]) -> str:
     """``{"camera_pos": "medium"}`` -> ``camera_pos=medium``; the main grid -> ``default``."""

@@ -22,7 +22,7 @@ from tqdm import tqdm
 
 from ..core.io import atomic_write_json
 from ..datasets.hub import check_hub_token
-from .checkpoint import check_checkpoints, fetch_checkpoints, given_evaluations
+from .checkpoint import check_checkpoints, fetch_checkpoints
 from .config import RUN_CONFIG_FILE, StudyConfig
 from .cost import describe, fit_cost_model
 from .episodes import push_results
@@ -71,7 +71,7 @@ def run_study(cfg: StudyConfig, command: str | None = None) -> StudyOutcome | st
     if cfg.fit_cost:
         return fit_cost_model(cfg, plan, study_dir)
     cfg.check_weight_files()  # before any step runs: weights are never downloaded
-    check_checkpoints(given_evaluations(plan.steps))  # a given checkpoint that cannot run on its env: one line
+    check_checkpoints(plan.given_evaluations())  # a given checkpoint that cannot run on its env: one line
     if cfg.push_to_hub:
         check_hub_token()  # before any step runs, not after hours of them
     study_dir.mkdir(parents=True, exist_ok=True)

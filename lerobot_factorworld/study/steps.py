@@ -88,6 +88,11 @@ def _version(distribution: str, default: str) -> str:
         return default
 
 
+def short_hash(payload: dict[str, Any]) -> str:
+    """16 hex digits of the SHA-256 of ``payload`` as sorted JSON: a step's key, or what an evaluation evaluates."""
+    return hashlib.sha256(json.dumps(payload, sort_keys=True).encode()).hexdigest()[:16]
+
+
 @dataclass(frozen=True)
 class Step:
     """One unit of work. ``inputs`` (JSON-able) and ``deps`` decide ``key``; ``meta`` only labels it."""
@@ -99,8 +104,7 @@ class Step:
 
     @property
     def key(self) -> str:
-        payload = {"format": STEP_FORMAT, "kind": self.kind, "inputs": self.inputs, "deps": list(self.deps)}
-        return hashlib.sha256(json.dumps(payload, sort_keys=True).encode()).hexdigest()[:16]
+        return short_hash({"format": STEP_FORMAT, "kind": self.kind, "inputs": self.inputs, "deps": list(self.deps)})
 
     @property
     def label(self) -> str:
@@ -129,8 +133,7 @@ def evaluated(step: Step) -> str:
     if step.deps:
         return step.deps[0]
     inputs = step.inputs
-    payload = {"checkpoint": inputs["checkpoint"], "environments": inputs["environments"]}
-    return hashlib.sha256(json.dumps(payload, sort_keys=True).encode()).hexdigest()[:16]
+    return short_hash({"checkpoint": inputs["checkpoint"], "environments": inputs["environments"]})
 
 
 def is_done(step: Step, study_dir: str | Path) -> bool:
