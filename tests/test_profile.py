@@ -84,6 +84,32 @@ def test_a_checkpoints_key_is_its_content(factorworld_checkpoint, tmp_path):
         checkpoint_folder(str(copy), planned.checkpoint)  # an evaluation planned before the change refuses it
 
 
+def test_a_hub_id_in_the_local_cache_is_used_offline(factorworld_checkpoint, tmp_path, monkeypatch):
+    """A Hub model id already in the Hugging Face cache resolves there with the Hub unreachable (nothing is
+    downloaded), keyed by content as the same files in a folder are; the profile plans it."""
+    import huggingface_hub
+
+    from lerobot_factorworld.study.checkpoint import fetch_checkpoint, keyed_checkpoint, local_folder
+    from lerobot_factorworld.study.plan import make_plan
+
+    cache, revision = tmp_path / "hub", "0123456789abcdef0123456789abcdef01234567"
+    repo = cache / "models--someone--bc_pick_place"
+    shutil.copytree(factorworld_checkpoint, repo / "snapshots" / revision)
+    (repo / "refs").mkdir()
+    (repo / "refs" / "main").write_text(revision)
+    monkeypatch.setattr(huggingface_hub.constants, "HF_HUB_CACHE", str(cache))
+    monkeypatch.setattr(huggingface_hub.constants, "HF_HUB_OFFLINE", True)
+
+    assert local_folder("someone/bc_pick_place") == repo / "snapshots" / revision
+    assert fetch_checkpoint("someone/bc_pick_place") == repo / "snapshots" / revision
+    assert keyed_checkpoint("someone/bc_pick_place") == keyed_checkpoint(str(factorworld_checkpoint))
+    assert local_folder("someone/not_cached") is None
+    cfg = _profile_config("someone/bc_pick_place", tmp_path / "out").study()
+    assert cfg.methods[0].checkpoint == "someone/bc_pick_place" and cfg.methods[0].name == "bc"
+    plan = make_plan(cfg)
+    assert set(plan.counts()) == {"eval"} and len(plan.steps) == 3
+
+
 def test_a_study_mixing_a_trained_and_a_given_method_plans_both(factorworld_checkpoint, tmp_path):
     from lerobot_factorworld.study.config import EvalSettings, MethodConfig, StudyConfig
     from lerobot_factorworld.study.cost import describe
