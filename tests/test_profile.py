@@ -63,6 +63,42 @@ def test_profile_writes_a_studys_outputs_without_collecting_or_training(bc_check
     assert all(is_done(step, out) for step in make_plan(cfg).steps)
 
 
+@pytest.mark.slow
+def test_train_defaults_to_the_checkpoints_own_dataset(bc_checkpoint, tiny_dataset, factorworld_checkpoint, tmp_path):
+    """A checkpoint trained here on a Factor World dataset (its train_config.json names it) is profiled on that
+    dataset's training environments without --n_train_envs/--train_factors/--seed; disagreeing settings, or a
+    --dataset_root that is not a Factor World dataset, are refused in one line."""
+    from lerobot_factorworld.core.settings import parse_config
+    from lerobot_factorworld.protocol.sampling import sample_configs
+    from lerobot_factorworld.protocol.sidecar import read_dataset_condition
+    from lerobot_factorworld.study.inputs import EvalInputs
+    from lerobot_factorworld.study.plan import make_plan
+    from lerobot_factorworld.study.policy_profile import ProfileConfig
+
+    def profile(checkpoint, *args: str) -> ProfileConfig:
+        flags = [f"--policy.path={checkpoint}", "--task=pick-place", "--factors=[light]", *EVAL, *args]
+        return parse_config(ProfileConfig, [*flags, f"--out_dir={tmp_path / 'out'}"], "profile")
+
+    cfg = profile(bc_checkpoint)
+    assert cfg.dataset_root == str(tiny_dataset)
+    study = cfg.study()
+    assert (study.n_train_envs, study.train_factors, study.seeds) == ([1], ["light"], [0])
+    train = next(s for s in make_plan(study).of_kind("eval") if s.meta["condition"] == "train")
+    env = EvalInputs.from_dict(train.inputs).environments  # the recipe the evaluation samples them with
+    sampled = sample_configs(env.task, env.n_envs, env.seed, "train", env.train_factors, env.sampling_options())
+    assert sampled == read_dataset_condition(tiny_dataset).train_configs("pick-place")
+    assert profile(bc_checkpoint, "--n_train_envs=1", "--seed=0").study().train_factors == ["light"]  # agree
+    with pytest.raises(ValueError, match=r"disagrees with dataset .*n_train_envs=5 but the dataset has 1"):
+        profile(bc_checkpoint, "--n_train_envs=5")
+    with pytest.raises(ValueError, match="is not a Factor World dataset"):  # SettingError: one line at the CLI
+        profile(bc_checkpoint, f"--dataset_root={tmp_path}")
+    # no train_config.json (not trained by lerobot-train here): the defaults, 5 environments, the paper's factors
+    flags = [f"--policy.path={factorworld_checkpoint}", "--task=pick-place", "--eval.n_test_envs=5"]
+    untrained = parse_config(ProfileConfig, [*flags, "--eval.episodes=5", f"--out_dir={tmp_path / 'out'}"], "profile")
+    assert untrained.dataset_root is None and untrained.study().n_train_envs == [5]
+    assert untrained.study().seeds == [0]
+
+
 def test_a_checkpoints_key_is_its_content(factorworld_checkpoint, tmp_path):
     from lerobot_factorworld.study.checkpoint import checkpoint_folder
     from lerobot_factorworld.study.inputs import EvalInputs

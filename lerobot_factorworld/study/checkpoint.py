@@ -27,10 +27,12 @@ from ..core.fingerprint import folder_fingerprint
 from ..core.settings import one_line
 from ..datasets.hub import HubUnreachableError, check_hub_reachable
 from ..envs.lerobot_obs import FACTORWORLD_OBS, LEROBOT_METAWORLD_OBS
+from ..protocol.sidecar import SIDECAR
 from .eval_env import env_config
 from .inputs import EnvInputs
 
 CONFIG_FILE = "config.json"
+TRAIN_CONFIG_FILE = "train_config.json"  # lerobot-train's settings, saved beside the weights
 # What lerobot-train writes into <output_dir>/checkpoints/<step>/pretrained_model and lerobot-eval loads.
 PRETRAINED_FILES = (CONFIG_FILE, "model.safetensors", "policy_preprocessor.json", "policy_postprocessor.json")
 GIVEN_CHECKPOINT = "checkpoint"  # an evaluation's run entry: where its given checkpoint is (its key: the content)
@@ -114,6 +116,20 @@ def read_policy_config(folder: str | Path) -> dict[str, Any]:
         return json.loads((Path(folder) / CONFIG_FILE).read_text())
     except (OSError, ValueError):
         return {}
+
+
+def training_dataset(folder: Path | None) -> str | None:
+    """The Factor World dataset a checkpoint was trained on: the ``dataset.root`` its ``train_config.json``
+    names, when that folder is here and holds Factor World's side-car; ``None`` otherwise (a checkpoint
+    trained elsewhere, on the Hub, or on other data). A relative root is read from the current folder, as
+    lerobot-train was most likely started there."""
+    if folder is None:
+        return None
+    try:
+        root = json.loads((folder / TRAIN_CONFIG_FILE).read_text()).get("dataset", {}).get("root")
+    except (OSError, ValueError, AttributeError):
+        return None
+    return str(root) if root and (Path(root) / SIDECAR).is_file() else None
 
 
 # --- checks before any work --------------------------------------------------------------------------------

@@ -12,7 +12,9 @@ from dataclasses import dataclass, field
 
 from ..envs.lerobot_obs import FACTORWORLD_OBS
 from ..factors.registry import PAPER_STUDY_FACTORS, WIDTHS
-from .checkpoint import local_folder, read_policy_config
+from ..families import family_of
+from ..protocol.sampling import SamplingOptions
+from .checkpoint import local_folder, read_policy_config, training_dataset
 from .config import CollectSettings, EvalSettings, MethodConfig, StudyConfig
 
 DEFAULT_METHOD = "checkpoint"  # the method's name when the checkpoint's config names no policy type
@@ -60,12 +62,17 @@ class ProfileConfig:
         pairs: Pair conditions: ``[all]`` or a list of ``a+b``.
         radius_factors: Factors of the radius sweep (``camera_pos``, ``table_pos``).
         radius_widths: Widths of the sweep (narrow / medium / wide).
+        dataset_root: The Factor World dataset the checkpoint was trained on: ``train`` is then its training
+            environments (N, factors, seed and sampling read from its ``meta/factorworld.json``; settings given
+            as well must agree). Default: the dataset the checkpoint's ``train_config.json`` names, when it is a
+            Factor World dataset on this machine (``factorworld collect`` + ``lerobot-train``); otherwise the
+            defaults below.
         n_train_envs: Environments of the unshifted ``train`` condition (default 5, or 1 with
             ``env.obs=lerobot_metaworld``: Meta-World's own scene, as ``lerobot-eval --env.obs=lerobot_metaworld``).
         train_factors: Factors varied across those environments (default the paper's seven, or none with
             ``env.obs=lerobot_metaworld``).
-        seed: Seed of the environment sampling (the ``seed`` column of the results; a checkpoint has no
-            training seed).
+        seed: Seed of the environment sampling (default 0; the ``seed`` column of the results; a checkpoint has
+            no training seed).
         eval: Episodes, test environments per shifted condition, ``start_seed`` (episode ``i`` is reset with
             ``start_seed + i`` in every condition), step limit, device, batch size, threads.
         name: Study name in the results and the report.
@@ -83,9 +90,10 @@ class ProfileConfig:
     pairs: list[str] = field(default_factory=list)
     radius_factors: list[str] = field(default_factory=list)
     radius_widths: list[str] = field(default_factory=lambda: list(WIDTHS))
+    dataset_root: str | None = None
     n_train_envs: int | None = None
     train_factors: list[str] | None = None
-    seed: int = 0
+    seed: int | None = None
     eval: EvalSettings = field(default_factory=EvalSettings)
     name: str = "profile"
     out_dir: str = "outputs/profile"
@@ -111,9 +119,12 @@ class ProfileConfig:
         from ..adapters.env_config import FactorWorldEnvConfig  # noqa: PLC0415
 
         view = {"cameras": self.env.cameras, "image_size": self.env.image_size}
+        if self.dataset_root is None and self.env.obs == FACTORWORLD_OBS:
+            self.dataset_root = training_dataset(local_folder(self.policy.path))
         env = FactorWorldEnvConfig(
             task=self.task,
             obs=self.env.obs,
+            dataset_root=self.dataset_root,
             n_train_envs=self.n_train_envs,
             train_factors=self.train_factors,
             seed=self.seed,
@@ -121,6 +132,7 @@ class ProfileConfig:
         )
         if len(env.task_names) != 1:
             raise ValueError(f"factorworld profile takes one task, got {self.task!r}")
+        self.seed = env.seed
         name = self.policy.name or _default_name(self.policy.path)
         method = MethodConfig(name=name, checkpoint=self.policy.path, obs=self.env.obs)
         return StudyConfig(
@@ -128,20 +140,43 @@ class ProfileConfig:
             out_dir=self.out_dir,
             tasks=env.task_names,
             n_train_envs=[env.n_train_envs],
-            seeds=[self.seed],
+            seeds=[env.seed],
             train_factors=list(env.train_factors),
             factors=list(self.factors),
             pairs=list(self.pairs),
             radius_factors=list(self.radius_factors),
             radius_widths=list(self.radius_widths),
             methods=[method],
-            collect=CollectSettings(cameras=env.cameras, image_size=env.image_size),
+            collect=_collect_settings(env.task_names[0], env.cameras, env.image_size, env.sampling),
             eval=self.eval,
             workers=self.workers,
             dry_run=self.dry_run,
             push_to_hub=self.push_to_hub,
             hub_repo_id=self.hub_repo_id,
         )
+
+
+def _collect_settings(task: str, cameras: str, image_size: int, sampling: SamplingOptions) -> CollectSettings:
+    """The study settings that sample ``train``'s environments as ``sampling`` does (a dataset's, or the
+    defaults); sampling a study cannot express is refused in one line."""
+    defaults, widths = SamplingOptions(), dict(sampling.widths)
+    object_pos_width = widths.pop("object_pos", CollectSettings.object_pos_width)
+    other = [f"widths.{name}={width}" for name, width in widths.items()]
+    other += [f"{name}={getattr(sampling, name)}" for name in ("texture_folder", "shape_folder", "asset_split")
+              if getattr(sampling, name) != getattr(defaults, name)]  # fmt: skip
+    if other:
+        raise ValueError(
+            f"the training environments were sampled with {', '.join(other)}, which a profile cannot reproduce; "
+            "evaluate the checkpoint with lerobot-eval --env.type=factorworld --env.dataset_root=<its dataset>"
+        )
+    return CollectSettings(
+        cameras=cameras,
+        image_size=image_size,
+        object_pos_width=object_pos_width,
+        n_distractors=sampling.n_distractors,
+        rgb_fraction=sampling.rgb_fraction,
+        n_objects=sampling.n_objects if "n_objects" in family_of(task).sampling_options else None,
+    )
 
 
 def _default_name(path: str) -> str:
