@@ -12,9 +12,13 @@
    --env.obs=lerobot_metaworld`` (Meta-World's unshifted scene), both with LeRobot's 500-step horizon.
 
 Prints a table of both success rates with their Wilson 95% intervals, whether they agree (intervals overlap)
-and whether every episode ended alike, and writes ``round_trip.json`` to ``--out``. Exit status 1 when the
-intervals do not overlap. ``--eval_seed`` defaults to ``--seed``: the episodes start where the
-demonstrations started (the training starts); another value evaluates on new starts.
+and whether every episode ended alike, and writes ``round_trip_seed<eval_seed>_n<episodes>.json`` to ``--out``.
+Exit status 1 when the intervals do not overlap. ``--eval_seed`` defaults to ``--seed``: the episodes start
+where the demonstrations started (the training starts); another value evaluates on new starts.
+
+Resumable: rerunning into the same ``--out`` reuses the recorded demonstrations, the checkpoint and finished
+evaluations (the recording and training settings must be the same; ``--eval_seed`` and ``--episodes`` may
+change, so one checkpoint can be evaluated on new starts afterwards).
 
 LeRobot's env draws through gymnasium's viewer, whose GL context is made current only when it is created,
 so this process renders nothing else, and each evaluation runs in its own ``lerobot-eval`` process.
@@ -94,6 +98,19 @@ def record(task: str, demos: int, seed: int, root: Path) -> int:
     return dataset.meta.total_frames
 
 
+def check_settings(args: argparse.Namespace) -> None:
+    """Reuse ``--out``'s demonstrations and checkpoint only for the same recording and training settings (the
+    evaluation's ``--eval_seed`` and ``--episodes`` may change); otherwise one line."""
+    path = args.out / "settings.json"
+    settings = {k: getattr(args, k) for k in ("task", "demos", "seed", "steps", "batch_size", "policy_arg")}
+    if path.is_file():
+        old = json.loads(path.read_text())
+        changed = ", ".join(f"{k}: {old.get(k)} -> {v}" for k, v in settings.items() if old.get(k) != v)
+        if changed:
+            raise SystemExit(f"error: {args.out} holds a run with other settings ({changed}); choose another --out")
+    path.write_text(json.dumps(settings, indent=1))
+
+
 def run(command: list[str], log: Path) -> None:
     """Run a LeRobot command, its output appended to ``log``; a failure stops here with the log's tail."""
     with open(log, "a") as out:
@@ -114,11 +131,14 @@ def train(args: argparse.Namespace, data: Path, out: Path, log: Path) -> Path:
 
 
 def evaluate(args: argparse.Namespace, env: str, checkpoint: Path, out: Path, log: Path) -> list[bool]:
-    """Per-episode successes of ``checkpoint`` under one env, the LeRobot way (``eval_info.json``)."""
-    run([str(BIN / "lerobot-eval"), f"--policy.path={checkpoint}", *(a.format(task=args.task) for a in ENVS[env]),
-         f"--eval.n_episodes={args.episodes}", "--eval.batch_size=1", f"--seed={args.eval_seed}",
-         f"--output_dir={out}"], log)  # fmt: skip
-    shutil.rmtree(out / "videos", ignore_errors=True)  # lerobot-eval's videos of the first episodes
+    """Per-episode successes of ``checkpoint`` under one env, the LeRobot way (``eval_info.json``, reused when
+    this evaluation already ran)."""
+    if not (out / "eval_info.json").is_file():
+        shutil.rmtree(out, ignore_errors=True)
+        run([str(BIN / "lerobot-eval"), f"--policy.path={checkpoint}", *(a.format(task=args.task) for a in ENVS[env]),
+             f"--eval.n_episodes={args.episodes}", "--eval.batch_size=1", f"--seed={args.eval_seed}",
+             f"--output_dir={out}"], log)  # fmt: skip
+        shutil.rmtree(out / "videos", ignore_errors=True)  # lerobot-eval's videos of the first episodes
     info = json.loads((out / "eval_info.json").read_text())
     return [bool(s) for task in info["per_task"] for s in task["metrics"]["successes"]]
 
@@ -153,16 +173,22 @@ def main() -> None:
     FactorWorldEnvConfig(task=args.task, obs="lerobot_metaworld")  # an unknown task or pick: one line, no work
     if f"{args.task}-v3" not in TASK_POLICY_MAPPING:
         raise SystemExit(f"error: LeRobot has no Meta-World expert for {args.task}")
-    if args.out.exists():
-        raise SystemExit(f"error: {args.out} exists; choose another --out")
-    args.out.mkdir(parents=True)
+    args.out.mkdir(parents=True, exist_ok=True)
+    check_settings(args)
     log = args.out / "log.txt"
-    frames = record(args.task, args.demos, args.seed, args.out / "data")
-    checkpoint = train(args, args.out / "data", args.out / "train", log)
-    successes = {env: evaluate(args, env, checkpoint, args.out / f"eval_{env}", log) for env in ENVS}
+    data, checkpoint = args.out / "data", args.out / "train" / "checkpoints" / "last" / "pretrained_model"
+    if not (data / "meta" / "info.json").is_file():
+        shutil.rmtree(data, ignore_errors=True)  # an interrupted recording: record again
+        record(args.task, args.demos, args.seed, data)
+    if not checkpoint.is_dir():
+        shutil.rmtree(args.out / "train", ignore_errors=True)  # an interrupted training (lerobot-train refuses it)
+        train(args, data, args.out / "train", log)
+    name = f"seed{args.eval_seed}_n{args.episodes}"
+    successes = {env: evaluate(args, env, checkpoint, args.out / f"eval_{env}_{name}", log) for env in ENVS}
+    frames = json.loads((data / "meta" / "info.json").read_text())["total_frames"]
     result = {"settings": {k: str(v) if isinstance(v, Path) else v for k, v in vars(args).items()},
               "frames": frames, **summary(successes)}  # fmt: skip
-    (args.out / "round_trip.json").write_text(json.dumps(result, indent=1))
+    (args.out / f"round_trip_{name}.json").write_text(json.dumps(result, indent=1))
     print("| env | successes | pc_success | 95% interval |\n|---|---|---|---|")
     for env, row in result["envs"].items():
         print(f"| {env} | {row['successes']}/{row['episodes']} | {row['pc_success']:.1f} | "

@@ -196,7 +196,7 @@ def test_round_trip_from_lerobots_own_metaworld_data(tmp_path):
         timeout=900,
     )
     assert proc.returncode == 0, proc.stdout[-2000:] + proc.stderr[-2000:]
-    result = json.loads((out / "round_trip.json").read_text())
+    result = json.loads((out / "round_trip_seed0_n2.json").read_text())
     lerobot, ours = result["envs"]["lerobot"], result["envs"]["factorworld"]
     assert lerobot["episodes"] == ours["episodes"] == 2
     assert result["intervals_overlap"] and result["same_episodes"]
