@@ -42,6 +42,7 @@ PUBLISHED = {
     "two_tasks": ROOT / "docs" / "study.md",
     "pick": ROOT / "docs" / "pick.md",
     "f1_pick-place_seed0": ROOT / "docs" / "findings.md",
+    "f9_pick": ROOT / "docs" / "findings.md",
 }  # committed studies and a page that must quote them
 
 
@@ -104,6 +105,24 @@ def test_report_command_regenerates_report_and_plots_from_a_results_csv_alone(st
     assert (out / "results.csv").read_bytes() == (quick / "results.csv").read_bytes()
     assert (out / "config.yaml").read_text() == config.read_text()
     assert sorted(p.name for p in out.glob("*.png")) == plots
+
+
+def test_a_report_of_the_train_condition_alone_has_no_factor_sections(studies):
+    """A profile with ``--factors=[]`` (a policy's success on its training environments, with failure stages)
+    reports the success tables and no empty factor ordering, gap table or gap plot."""
+    quick = studies / "quick"
+    lines = (quick / "results.csv").read_text().splitlines()
+    condition = lines[0].split(",").index("condition")
+    train_rows = [line for line in lines[1:] if line.split(",")[condition] == "train"]
+    assert train_rows
+    (quick / "results.csv").write_text("\n".join([lines[0], *train_rows]) + "\n")
+    config = (quick / "config.yaml").read_text()
+    (quick / "config.yaml").write_text(config.replace("factors: [camera_pos, table_texture, light]", "factors: []"))
+    assert main(["report", f"--results={quick / 'results.csv'}"]) is None
+    report = (quick / REPORT_FILE).read_text()
+    assert "## Success rates" in report and "## Every cell" in report
+    assert "## Factor ordering" not in report and "## Gap per factor and N" not in report
+    assert not (quick / "gap_vs_n.png").exists()
 
 
 def test_a_pick_report_reads_its_breakdowns_csv_and_pools_seeds_with_the_bootstrap(studies, tmp_path):

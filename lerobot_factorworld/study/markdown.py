@@ -127,9 +127,10 @@ def render(
     unequal = [r for r in rows if r["episodes"] % r["n_envs"] or r["envs_visited"] != r["n_envs"]]
     if unequal:
         lines += [f"**Coverage:** {len(unequal)} row(s) did not visit their environments equally.", ""]
-    lines += _ordering_section(cfg, rows)
+    shifted = any(r["condition"] != TRAIN_SUITE for r in rows)  # a profile may evaluate `train` alone
+    lines += _ordering_section(cfg, rows) if cfg.factors else []
     lines += family_sections(FAMILY_RESULTS)
-    lines += _gap_table(cfg, rows)
+    lines += _gap_table(cfg, rows) if shifted else []
     lines += _pairs_section(cfg, rows)
     lines += _radius_section(cfg, rows)
     lines += _success_table(cfg, rows)
