@@ -162,13 +162,13 @@ def cmd_profile(args: list[str]) -> None:
 
     command = "factorworld profile " + " ".join(args)
     cfg = parse_config(ProfileConfig, [_study_alias(arg) for arg in args], "profile")
+    study = cfg.study()
     if cfg.dataset_root:
-        study = cfg.study()
         print(
             f"train: the {study.n_train_envs[0]} training environment(s) of dataset {cfg.dataset_root} "
             f"(seed {study.seeds[0]}, varying {', '.join(study.train_factors) or 'no factor'})"
         )
-    _report_outcome(run_study(cfg.study(), command=command))
+    _report_outcome(run_study(study, command=command))
 
 
 def _report_outcome(outcome: StudyOutcome | str) -> None:

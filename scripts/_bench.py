@@ -103,6 +103,19 @@ def run_command(command: list[str], label: str) -> None:
         raise RuntimeError(f"{label} failed (exit code {proc.returncode}); see its output above")
 
 
+def run_logged(command: list[str], log: Path, env: dict[str, str] | None = None, append: bool = True) -> None:
+    """Run ``command`` from the repository root, its output appended to ``log`` (or replacing it); a failure
+    stops the script with the log's tail (the long-run scripts: learning curves, the round trip)."""
+    with open(log, "a" if append else "w") as out:
+        out.write("$ " + " ".join(command) + "\n")
+        out.flush()
+        proc = subprocess.run(command, stdout=out, stderr=subprocess.STDOUT, cwd=REPO_ROOT, env=env)
+    if proc.returncode != 0:
+        raise SystemExit(
+            f"failed (exit {proc.returncode}): {' '.join(command[:2])}; see {log}:\n" + log.read_text()[-2000:]
+        )
+
+
 def run_child(command: list[str], result_path: Path, label: str) -> dict:
     """Run ``command`` (which must call :func:`write_result`) and return its JSON result."""
     run_command(command, label)

@@ -28,12 +28,11 @@ import json
 import math
 import os
 import re
-import subprocess
 import sys
 import time
 from pathlib import Path
 
-from _bench import REPO_ROOT, add_repo_to_path, check_tasks, setup_headless_gl
+from _bench import add_repo_to_path, check_tasks, run_logged, setup_headless_gl
 
 setup_headless_gl()
 add_repo_to_path()
@@ -44,24 +43,11 @@ BIN = Path(sys.executable).parent
 COLUMNS = ("epochs", "steps", "successes", "episodes", "success_rate", "ci_low", "ci_high", "loss")
 
 
-def run(command: list[str], log: Path, env: dict[str, str] | None = None, append: bool = True) -> None:
-    """Run ``command``, its output appended to ``log`` (or replacing it); a failure stops the script with the
-    log's tail."""
-    with open(log, "a" if append else "w") as out:
-        out.write("$ " + " ".join(command) + "\n")
-        out.flush()
-        proc = subprocess.run(command, stdout=out, stderr=subprocess.STDOUT, cwd=REPO_ROOT, env=env)
-    if proc.returncode != 0:
-        raise SystemExit(
-            f"failed (exit {proc.returncode}): {' '.join(command[:2])}; see {log}:\n" + log.read_text()[-2000:]
-        )
-
-
 def collect(args: argparse.Namespace, data: Path, log: Path) -> int:
     """Collect the demos once; returns the dataset's frame count."""
     info = data / "meta" / "info.json"
     if not info.is_file():
-        run([str(BIN / "factorworld"), "collect", f"--task={args.task}", f"--n_envs={args.n}",
+        run_logged([str(BIN / "factorworld"), "collect", f"--task={args.task}", f"--n_envs={args.n}",
              f"--demos={args.demos}", f"--action_noise={args.action_noise}", "--use_videos=false",
              f"--root={data}", f"--repo_id=local/curve_{args.task}", "--mode=overwrite"], log)  # fmt: skip
     return int(json.loads(info.read_text())["total_frames"])
@@ -78,7 +64,7 @@ def train(args: argparse.Namespace, data: Path, out: Path, steps_per_save: int, 
     if out.exists():  # an interrupted training: start over (lerobot-train refuses an existing folder)
         out.rename(out.with_name(f"{out.name}.interrupted-{int(time.time())}"))
     env = {**os.environ, "OMP_NUM_THREADS": str(args.threads)}
-    run([str(BIN / "lerobot-train"), "--policy.type=bc", f"--policy.augmentation={args.augmentation}",
+    run_logged([str(BIN / "lerobot-train"), "--policy.type=bc", f"--policy.augmentation={args.augmentation}",
          "--policy.device=cpu", "--policy.push_to_hub=false", f"--dataset.repo_id=local/curve_{args.task}",
          f"--dataset.root={data}", f"--steps={total}", f"--batch_size={args.batch_size}", "--num_workers=1",
          f"--save_freq={steps_per_save}", f"--log_freq={log_freq(steps_per_save)}", "--seed=0",
@@ -89,7 +75,7 @@ def evaluate(args: argparse.Namespace, checkpoint: Path, out: Path, log: Path) -
     """Successes of ``checkpoint`` on the training environments (cached in ``out/eval_info.json``)."""
     info = out / "eval_info.json"
     if not info.is_file():
-        run([str(BIN / "lerobot-eval"), f"--policy.path={checkpoint}", "--env.type=factorworld",
+        run_logged([str(BIN / "lerobot-eval"), f"--policy.path={checkpoint}", "--env.type=factorworld",
              f"--env.task={args.task}", f"--env.n_train_envs={args.n}", f"--eval.n_episodes={args.episodes}",
              f"--env.episode_length={args.max_episode_steps}", "--eval.batch_size=1", f"--seed={args.seed}",
              f"--output_dir={out}"], log)  # fmt: skip

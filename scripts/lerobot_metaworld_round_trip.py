@@ -32,12 +32,11 @@ from __future__ import annotations
 import argparse
 import json
 import shutil
-import subprocess
 import sys
 from pathlib import Path
 
 import numpy as np
-from _bench import REPO_ROOT, add_repo_to_path, setup_headless_gl
+from _bench import add_repo_to_path, run_logged, setup_headless_gl
 
 setup_headless_gl()
 add_repo_to_path()
@@ -63,8 +62,8 @@ ENVS = {
 }
 
 
-def record(task: str, demos: int, seed: int, root: Path) -> int:
-    """Scripted demonstrations through LeRobot's own env into a LeRobotDataset at ``root``; returns its frames.
+def record(task: str, demos: int, seed: int, root: Path) -> None:
+    """Scripted demonstrations through LeRobot's own env into a LeRobotDataset at ``root``.
     A demonstration the expert does not finish within the horizon is an error (it would teach failure)."""
     env = MetaworldEnv(f"{task}-v3", obs_type="pixels_agent_pos")
     dataset = LeRobotDataset.create(
@@ -95,7 +94,6 @@ def record(task: str, demos: int, seed: int, root: Path) -> int:
     finally:
         dataset.finalize()
         env.close()
-    return dataset.meta.total_frames
 
 
 def check_settings(args: argparse.Namespace) -> None:
@@ -111,18 +109,8 @@ def check_settings(args: argparse.Namespace) -> None:
     path.write_text(json.dumps(settings, indent=1))
 
 
-def run(command: list[str], log: Path) -> None:
-    """Run a LeRobot command, its output appended to ``log``; a failure stops here with the log's tail."""
-    with open(log, "a") as out:
-        out.write("$ " + " ".join(command) + "\n")
-        out.flush()
-        proc = subprocess.run(command, stdout=out, stderr=subprocess.STDOUT, cwd=REPO_ROOT)
-    if proc.returncode != 0:
-        raise SystemExit(f"failed (exit {proc.returncode}): {command[0]}; see {log}:\n{log.read_text()[-2000:]}")
-
-
 def train(args: argparse.Namespace, data: Path, out: Path, log: Path) -> Path:
-    run([str(BIN / "lerobot-train"), "--policy.type=bc", "--policy.device=cpu", "--policy.push_to_hub=false",
+    run_logged([str(BIN / "lerobot-train"), "--policy.type=bc", "--policy.device=cpu", "--policy.push_to_hub=false",
          *(args.policy_arg or DEFAULT_POLICY_ARGS), f"--dataset.repo_id=local/lerobot_metaworld_{args.task}",
          f"--dataset.root={data}", f"--steps={args.steps}", f"--batch_size={args.batch_size}", "--num_workers=0",
          f"--save_freq={args.steps}", f"--log_freq={min(100, args.steps)}", "--seed=0", "--wandb.enable=false",
@@ -135,7 +123,7 @@ def evaluate(args: argparse.Namespace, env: str, checkpoint: Path, out: Path, lo
     this evaluation already ran)."""
     if not (out / "eval_info.json").is_file():
         shutil.rmtree(out, ignore_errors=True)
-        run([str(BIN / "lerobot-eval"), f"--policy.path={checkpoint}", *(a.format(task=args.task) for a in ENVS[env]),
+        run_logged([str(BIN / "lerobot-eval"), f"--policy.path={checkpoint}", *(a.format(task=args.task) for a in ENVS[env]),
              f"--eval.n_episodes={args.episodes}", "--eval.batch_size=1", f"--seed={args.eval_seed}",
              f"--output_dir={out}"], log)  # fmt: skip
         shutil.rmtree(out / "videos", ignore_errors=True)  # lerobot-eval's videos of the first episodes

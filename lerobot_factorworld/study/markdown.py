@@ -127,10 +127,9 @@ def render(
     unequal = [r for r in rows if r["episodes"] % r["n_envs"] or r["envs_visited"] != r["n_envs"]]
     if unequal:
         lines += [f"**Coverage:** {len(unequal)} row(s) did not visit their environments equally.", ""]
-    shifted = any(r["condition"] != TRAIN_SUITE for r in rows)  # a profile may evaluate `train` alone
-    lines += _ordering_section(cfg, rows) if cfg.factors else []
+    lines += _ordering_section(cfg, rows)
     lines += family_sections(FAMILY_RESULTS)
-    lines += _gap_table(cfg, rows) if shifted else []
+    lines += _gap_table(cfg, rows)
     lines += _pairs_section(cfg, rows)
     lines += _radius_section(cfg, rows)
     lines += _success_table(cfg, rows)
@@ -187,6 +186,8 @@ def _given_lines(cfg: StudyConfig, rows: list[dict]) -> list[str]:
 
 
 def _ordering_section(cfg: StudyConfig, rows: list[dict]) -> list[str]:
+    if not cfg.factors:  # e.g. a profile of the `train` condition alone
+        return []
     method = cfg.methods[0].name
     gaps = factor_ordering(rows, method, cfg.factors)
     ours = rank_hardest_first({f: v[0] for f, v in gaps.items()})
@@ -240,6 +241,8 @@ def _ordering_section(cfg: StudyConfig, rows: list[dict]) -> list[str]:
 
 def _gap_table(cfg: StudyConfig, rows: list[dict]) -> list[str]:
     stats = gap_per_factor_and_n(rows)
+    if not stats:
+        return []
     lines = ["## Gap per factor and N (mean ± SE over seeds, averaged over tasks)", ""]
     header = "| method | condition | " + " | ".join(f"N={n}" for n in cfg.n_train_envs) + " |"
     lines += [header, "|---|---|" + "---|" * len(cfg.n_train_envs)]

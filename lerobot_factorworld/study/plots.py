@@ -41,7 +41,7 @@ def _plt():
 
 def plot_gap_vs_n(rows, cfg: StudyConfig, path: Path) -> bool:
     stats = gap_per_factor_and_n(rows)
-    if not stats or not cfg.factors:  # a profile of the train condition alone has no factor to plot
+    if not stats:
         return False
     plt = _plt()
     cols = min(4, len(cfg.factors))

@@ -132,7 +132,6 @@ class ProfileConfig:
         )
         if len(env.task_names) != 1:
             raise ValueError(f"factorworld profile takes one task, got {self.task!r}")
-        self.seed = env.seed
         name = self.policy.name or _default_name(self.policy.path)
         method = MethodConfig(name=name, checkpoint=self.policy.path, obs=self.env.obs)
         return StudyConfig(
