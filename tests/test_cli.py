@@ -184,3 +184,13 @@ def test_the_installed_command_prints_one_line_and_no_traceback(args, expected):
     out = subprocess.run([str(FACTORWORLD), *args], capture_output=True, text=True, timeout=120, cwd=REPO)
     assert out.returncode == 2 and out.stdout == ""
     assert_one_line(out.stderr, expected)
+
+
+def test_the_program_ends_without_collecting_what_it_imported():
+    """``factorworld`` (the console script and ``python -m``) is ``run``: ``main`` and then ``gc.freeze()``,
+    so the interpreter's last collection skips every object torch and LeRobot made (seconds at exit)."""
+    assert "import run" in FACTORWORLD.read_text()  # the installed console script
+    code = "import gc, sys; from lerobot_factorworld import cli; sys.argv = ['factorworld', 'tasks']; cli.run(); "
+    code += "print('frozen', gc.get_freeze_count())"
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
+    assert int(out.split("frozen ")[-1]) > 1000, out
