@@ -429,6 +429,45 @@ def test_a_plan_on_a_local_ray_instance_gives_the_same_results(toy, tmp_path):
             assert filecmp.cmp(weights, Path(on_ray["checkpoint"]) / "model.safetensors", shallow=False)
 
 
+@TOY_GROUP
+@pytest.mark.slow
+def test_a_study_reuses_another_studys_finished_steps_by_key(toy, tmp_path):
+    """N = 1 of the toy with camera position instead of table texture, reusing the toy's folder: its collection,
+    training and the two evaluations it shares are linked (the same rows), only the two new ones run, and
+    nothing in the toy's folder changes."""
+    import csv
+
+    from lerobot_factorworld.study.cost import describe
+    from lerobot_factorworld.study.plan import make_plan
+    from lerobot_factorworld.study.runner import run_study
+
+    cfg, first = toy
+    toy_steps = sorted(p.relative_to(cfg.out_dir) for p in Path(cfg.out_dir, "steps").rglob("*"))
+    narrow, _ = _toy_config(tmp_path / "reuser", n_train_envs="[1]", factors="[light, camera_pos]")
+    reuser = replace(narrow, reuse_from=[cfg.out_dir])
+    assert "eval          4 steps,      2 cached (2 in reuse_from),      2 to run" in describe(
+        reuser, make_plan(reuser)
+    )
+    outcome = run_study(reuser, command="reuse")
+    assert not outcome.failed, outcome.failed
+    assert outcome.ran == {"collect": 0, "train": 0, "eval": 2}
+    assert outcome.cached == {"collect": 1, "train": 1, "eval": 2}
+    rows, toy_rows = list(csv.DictReader(open(outcome.results))), list(csv.DictReader(open(first.results)))
+    shared = [r for r in rows if r["condition"] in ("train", "light")]
+    assert len(shared) == 2 and all(row in toy_rows for row in shared)
+    linked = [
+        s.folder(reuser.out_dir)
+        for s in make_plan(reuser).steps
+        if s.kind != "eval" or s.meta["condition"] in ("train", "light")
+    ]
+    assert len(linked) == 4 and all(p.is_symlink() for p in linked)
+    assert sorted(p.relative_to(cfg.out_dir) for p in Path(cfg.out_dir, "steps").rglob("*")) == toy_steps
+    with pytest.raises(ValueError, match="is this study's own folder"):
+        replace(reuser, reuse_from=[reuser.out_dir])
+    with pytest.raises(ValueError, match=f"reuse_from: {tmp_path} is not a study folder"):
+        replace(reuser, reuse_from=[str(tmp_path)])
+
+
 # --- command line -------------------------------------------------------------------------------
 
 

@@ -28,6 +28,7 @@ from ..protocol.conditions import PAIR_SEPARATOR, condition_name, parse_shift
 from ..protocol.sampling import DEFAULT_RGB_FRACTION, SamplingOptions
 from ..tasks import get_task
 from .checkpoint import checkpoint_setting
+from .reuse import check_reuse_from
 from .steps import EXECUTIONS  # how steps run, never what they compute
 
 EXECUTORS = ("local", "ray")
@@ -375,6 +376,9 @@ class StudyConfig:
             Hugging Face dataset repo ``hub_repo_id`` (a token is checked before any work; an unreachable Hub
             is one warning line, and the local results stay complete). Not done while steps have failed.
         hub_repo_id: ``user/name`` of that dataset repo (required by ``push_to_hub``).
+        reuse_from: Other studies' folders whose finished steps this study uses where the keys (the inputs)
+            are the same, linked into ``steps/`` instead of run again (``study/reuse.py``): e.g. F3 and F5
+            reuse F1's seed-0 collections, trainings and single-factor evaluations.
     """
 
     name: str = "study"
@@ -404,9 +408,11 @@ class StudyConfig:
     rerun_stale: bool = False
     push_to_hub: bool = False
     hub_repo_id: str | None = None
+    reuse_from: list[str] = field(default_factory=list)
 
     def __post_init__(self) -> None:
         self.methods = [m if isinstance(m, MethodConfig) else MethodConfig(**m) for m in self.methods]
+        self.reuse_from = [absolute_path(folder) for folder in self.reuse_from]  # steps run elsewhere
         self.validate()
 
     # --- derived -----------------------------------------------------------------------------
@@ -476,6 +482,7 @@ class StudyConfig:
         if self.strict and self.rerun_stale:
             raise ValueError("strict=true refuses steps made by other code, rerun_stale=true redoes them: set one")
         self._validate_hub()
+        check_reuse_from(self.reuse_from, self.out_dir)
         if min(self.n_train_envs) < 1 or len(set(self.n_train_envs)) != len(self.n_train_envs):
             raise ValueError(f"n_train_envs must be distinct positive numbers, got {self.n_train_envs}")
         if len(set(self.seeds)) != len(self.seeds):

@@ -41,6 +41,7 @@ from .inputs import CollectInputs, EnvInputs, EvalInputs, TrainInputs
 from .plan import Plan
 from .power import power_lines
 from .profile import finished_timings, last_run
+from .reuse import reusable_steps
 from .steps import KINDS, TIMINGS, Step, evaluated, is_done
 
 COST_MODEL_FILE = Path(__file__).with_name("cost_model.json")
@@ -257,10 +258,13 @@ def describe(cfg: StudyConfig, plan: Plan) -> str:
     """The ``--dry-run`` text: steps per kind, how many are cached, the cost estimate."""
     study_dir = Path(cfg.out_dir)
     lines = [f"study {cfg.name!r} in {study_dir}"]
-    todo = [s for s in plan.steps if not is_done(s, study_dir)]
+    reused = reusable_steps(plan.steps, study_dir, cfg.reuse_from)
+    todo = [s for s in plan.steps if not is_done(s, study_dir) and s.key not in reused]
     for kind, total in plan.counts().items():
         cached = total - sum(1 for s in todo if s.kind == kind)
-        lines.append(f"  {kind:8s} {total:6d} steps, {cached:6d} cached, {total - cached:6d} to run")
+        from_others = sum(1 for s in plan.of_kind(kind) if s.key in reused)
+        also = f" ({from_others} in reuse_from)" if from_others else ""
+        lines.append(f"  {kind:8s} {total:6d} steps, {cached:6d} cached{also}, {total - cached:6d} to run")
     lines.append(
         f"  grid: {len(cfg.methods)} method(s) x {len(cfg.tasks)} task(s) x N {cfg.n_train_envs} x {len(cfg.seeds)} seed(s); "
         f"conditions: train + {len(cfg.shifted_factors())} factors + {len(cfg.pair_conditions())} pairs"

@@ -30,6 +30,7 @@ from .executors import make_executor, task_units
 from .plan import Plan, make_plan
 from .profile import profile_text, record_run
 from .report import write_report
+from .reuse import link_reused_steps
 from .stale import check_not_stale, rerun_stale, stale_steps, warn_stale
 from .steps import KINDS, Step, is_done
 
@@ -77,6 +78,9 @@ def run_study(cfg: StudyConfig, command: str | None = None) -> StudyOutcome | st
     study_dir.mkdir(parents=True, exist_ok=True)
     command = command or "factorworld study " + " ".join(shlex.quote(a) for a in sys.argv[2:])
     with _lock(study_dir):
+        reused = link_reused_steps(plan.steps, study_dir, cfg.reuse_from)
+        if reused:
+            print(f"reused {reused} finished step(s) of {', '.join(cfg.reuse_from)} (reuse_from)", file=sys.stderr)
         stale = stale_steps(plan, study_dir)  # under the lock: no other run changes them meanwhile
         check_not_stale(cfg, stale)  # strict: before any work
         warn_stale(cfg, plan, study_dir, stale)
