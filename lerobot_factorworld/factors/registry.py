@@ -15,7 +15,8 @@ from typing import Any, Literal
 from ..tasks import TASKS, TaskSpec, get_task
 
 WIDTHS = ("narrow", "medium", "wide")
-TEXTURE_SCHEMES = ("proc:", "metaworld:", "file:", "rgb:")
+RGB_SCHEME = "rgb:"  # a flat colour instead of an image: rgb:r,g,b
+TEXTURE_SCHEMES = ("proc:", "metaworld:", "file:", RGB_SCHEME)
 SHAPE_SCHEMES = ("proc:", "metaworld:", "file:")
 
 Range = tuple[tuple[float, ...], tuple[float, ...]]
@@ -341,17 +342,22 @@ def _validate_asset_name(factor: str, value: Any, schemes: tuple[str, ...]) -> s
     if not isinstance(value, str) or not value.startswith(schemes):
         raise ValueError(
             f"factor {factor!r} expects an asset name starting with one of {', '.join(schemes)} "
-            f"(e.g. 'proc:checker-003'{', or rgb:0.2,0.5,0.9' if 'rgb:' in schemes else ''}), got {value!r}"
+            f"(e.g. 'proc:checker-003'{', or rgb:0.2,0.5,0.9' if RGB_SCHEME in schemes else ''}), got {value!r}"
         )
-    if value.startswith("rgb:"):
+    if is_rgb(value):
         parse_rgb(value)
     return value
+
+
+def is_rgb(value: str) -> bool:
+    """Whether a texture value is a flat colour (``rgb:r,g,b``) rather than an image."""
+    return value.startswith(RGB_SCHEME)
 
 
 def parse_rgb(value: str) -> tuple[float, float, float]:
     """``rgb:r,g,b`` with components in [0, 1] -> floats."""
     try:
-        rgb = tuple(float(v) for v in value.removeprefix("rgb:").split(","))
+        rgb = tuple(float(v) for v in value.removeprefix(RGB_SCHEME).split(","))
     except ValueError:
         rgb = ()
     if len(rgb) != 3 or not all(0.0 <= c <= 1.0 for c in rgb):
@@ -360,7 +366,7 @@ def parse_rgb(value: str) -> tuple[float, float, float]:
 
 
 def format_rgb(rgb: tuple[float, float, float]) -> str:
-    return "rgb:" + ",".join(f"{c:.4f}" for c in rgb)
+    return RGB_SCHEME + ",".join(f"{c:.4f}" for c in rgb)
 
 
 def _validate_objects(value: Any) -> tuple:

@@ -15,7 +15,7 @@ import mujoco
 import numpy as np
 
 from ..assets import load_texture
-from ..factors.registry import parse_rgb
+from ..factors.registry import is_rgb, parse_rgb
 from ..scene.build import TABLE_CENTER, TEXTURE_SIZE
 from .catalog import get_object
 from .layout import PlacedObject
@@ -70,7 +70,7 @@ def _add_object(spec: mujoco.MjSpec, item: PlacedObject, texture: str | None) ->
 
 
 def _tinted_texture(spec: mujoco.MjSpec, material, value: str, rgb: tuple[float, float, float]) -> None:
-    if value.startswith("rgb:"):  # a flat colour shades the object's own colour by its luminance, as a pattern does
+    if is_rgb(value):  # a flat colour shades the object's own colour by its luminance, as a pattern does
         luminance = float(np.dot(parse_rgb(value), LUMA))
         material.rgba = [*(float(c) * (TINT_FLOOR + (1.0 - TINT_FLOOR) * luminance) for c in rgb), 1.0]
         return

@@ -24,7 +24,7 @@ import numpy as np
 from ..assets import load_mesh, load_texture
 from ..assets.scenes import VISIBLE_GROUPS, metaworld_xml
 from ..core.checks import check_choice
-from ..factors.registry import parse_rgb
+from ..factors.registry import is_rgb, parse_rgb
 from ..factors.values import FactorValues, SceneObject
 from ..tasks import TaskSpec, get_task
 from .cameras import CAMERAS
@@ -202,7 +202,7 @@ def _add_material(spec: mujoco.MjSpec, name: str, value: str, cube: bool) -> str
 def _paint(spec: mujoco.MjSpec, material, value: str, cube: bool) -> None:
     textures = list(material.textures)
     role = int(mujoco.mjtTextureRole.mjTEXROLE_RGB)
-    if value.startswith("rgb:"):
+    if is_rgb(value):
         material.rgba = [*parse_rgb(value), 1.0]
         textures[role] = ""
     else:
@@ -215,7 +215,7 @@ def _geom_rgba(value: str) -> list[float]:
     """The colour of a geom painted with texture ``value``: MuJoCo draws a geom whose rgba is not its default
     in that rgba, not in its material's, so white under an image (the texture's own colours) and the colour
     itself for a flat ``rgb:`` one."""
-    return [*parse_rgb(value), 1.0] if value.startswith("rgb:") else [1.0, 1.0, 1.0, 1.0]
+    return [*parse_rgb(value), 1.0] if is_rgb(value) else [1.0, 1.0, 1.0, 1.0]
 
 
 def _retexture_material(spec: mujoco.MjSpec, material_name: str, value: str, cube: bool) -> None:
