@@ -43,6 +43,7 @@ PUBLISHED = {
     "pick": ROOT / "docs" / "pick.md",
     "f1_pick-place_seed0": ROOT / "docs" / "findings.md",
     "f9_pick": ROOT / "docs" / "findings.md",
+    "f3_pairs": ROOT / "docs" / "findings.md",
     "f7_object_texture_images": ROOT / "docs" / "findings.md",
     "f7_object_texture_colours": ROOT / "docs" / "findings.md",
     "bp60_cap200": ROOT / "docs" / "findings.md",

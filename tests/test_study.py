@@ -147,6 +147,40 @@ def test_a_pick_study_report_sets_success_next_to_the_papers_real_robot_table():
 # --- protocol -----------------------------------------------------------------------------------
 
 
+def test_pairs_are_counted_against_the_papers_band_per_task():
+    """A task where the singles barely matter (pairs at their harder factor) beside one where pairs compound:
+    averaged over tasks the band hides the first; per task both show."""
+    from lerobot_factorworld.study.aggregate import pair_bands
+    from lerobot_factorworld.study.plan import DEFAULT_WIDTHS
+
+    def row(task, condition, rate, p_train=1.0):
+        return {
+            "method": "bc",
+            "task": task,
+            "n_train_envs": 5,
+            "seed": 0,
+            "widths": DEFAULT_WIDTHS,
+            "condition": condition,
+            "n_factors": condition.count("+") + 1,
+            "success_rate": rate,
+            "gap": p_train - rate,
+        }
+
+    rates = {
+        "easy": {"a": 0.9, "b": 1.0, "c": 0.95, "a+b": 0.9, "a+c": 0.88, "b+c": 0.95},
+        "hard": {"a": 0.5, "b": 0.6, "c": 0.0, "a+b": 0.2, "a+c": 0.0, "b+c": 0.1},
+    }
+    rows = [row(task, condition, rate) for task, conditions in rates.items() for condition, rate in conditions.items()]
+    bands = pair_bands(rows, "bc", 0.06)
+    assert list(bands) == ["easy", "hard"]
+    easy, hard = bands["easy"], bands["hard"]
+    assert (easy.within, easy.below, easy.above) == (3, 0, 0)  # a+c: (0.88 - 0.9) / 0.9 = -0.022
+    assert (hard.within, hard.below, hard.above) == (0, 1, 0)  # a+b: -0.6; c never succeeds: no metric
+    # interactions: a+b (0.8 - 0.5 - 0.4), a+c (1 - 0.5 - 1), b+c (0.9 - 0.4 - 1)
+    assert hard.mean_interaction == pytest.approx((-0.1 - 0.5 - 0.5) / 3)
+    assert pair_bands(rows, "other", 0.06) == {}
+
+
 def test_test_environments_do_not_depend_on_the_other_conditions():
     alone = evaluation_suites("pick-place", 2, ["light", "table_texture"], ["light"], 4, seed=3)
     crowded = evaluation_suites(

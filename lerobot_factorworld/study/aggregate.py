@@ -123,6 +123,41 @@ def pair_rows(rows: Sequence[dict]) -> list[dict]:
     return out
 
 
+@dataclass(frozen=True)
+class PairBand:
+    """One task's pairs against the paper's band: how many pair metrics (per cell, averaged over N and seeds)
+    lie within ±tolerance, below it (the pair is worse than its harder factor) and above it, and the mean
+    interaction gap(A+B) - gap(A) - gap(B) (negative: the pair costs less than its two gaps added)."""
+
+    within: int
+    below: int
+    above: int
+    mean_interaction: float
+
+
+def pair_bands(rows: Sequence[dict], method: str, tolerance: float) -> dict[str, PairBand]:
+    """Per task, ``method``'s pairs counted against the band ±``tolerance`` (pairs without a metric left out)."""
+    metrics: dict[tuple[str, str], list[float]] = defaultdict(list)
+    interactions: dict[str, list[float]] = defaultdict(list)
+    for row in pair_rows(rows):
+        if row["method"] != method:
+            continue
+        if not math.isnan(row["pair_metric"]):
+            metrics[(row["task"], row["pair"])].append(row["pair_metric"])
+        if not math.isnan(row["interaction"]):
+            interactions[row["task"]].append(row["interaction"])
+    out = {}
+    for task in dict.fromkeys(task for task, _ in metrics):
+        means = [float(np.mean(v)) for (t, _), v in metrics.items() if t == task]
+        out[task] = PairBand(
+            within=sum(abs(m) <= tolerance for m in means),
+            below=sum(m < -tolerance for m in means),
+            above=sum(m > tolerance for m in means),
+            mean_interaction=float(np.mean(interactions[task])) if interactions[task] else math.nan,
+        )
+    return out
+
+
 def factor_ordering(rows: Sequence[dict], method: str, factors: Sequence[str]) -> dict[str, tuple[float, float]]:
     """Mean gap (over N, tasks; mean and SE over seeds) per single factor of the main grid, for ``method``."""
     stats = gap_per_factor(rows, factors)

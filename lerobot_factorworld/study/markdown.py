@@ -19,6 +19,7 @@ from .aggregate import (
     gap_per_radius,
     main_grid,
     ordering_rho_interval,
+    pair_bands,
     pair_rows,
     pair_summary,
     pooled_success,
@@ -316,6 +317,18 @@ def _pairs_section(cfg: StudyConfig, rows: list[dict]) -> list[str]:
             f"(95% bootstrap interval of the count: {low:.0f}-{high:.0f}); {p_within:.0f} of {boot.pairs_pooled} "
             f"with the pooled one ({p_low:.0f}-{p_high:.0f}). Paper: {PAPER_PAIRS_WITHIN}. Resampling adds noise "
             "that moves metrics out of the band, so the count's interval leans below its point.",
+            "",
+        ]
+    bands = pair_bands(rows, first, tol)
+    if len(bands) > 1:  # a task where single factors barely matter can hide one where pairs compound
+        lines += [
+            f"Per task ({first}, per-cell metric averaged over N and seeds): "
+            + "; ".join(
+                f"{task} {b.within} of {b.within + b.below + b.above} within ±{tol:.0%} ({b.below} below, "
+                f"{b.above} above; mean interaction {b.mean_interaction:+.3f})"
+                for task, b in bands.items()
+            )
+            + ".",
             "",
         ]
     return lines
