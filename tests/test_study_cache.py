@@ -270,3 +270,30 @@ def test_frozen_resnet_encoders_cost_more_than_the_conv_encoder(tmp_path, monkey
         hours = {name: estimate(make_plan(c), list(make_plan(c).steps)) for name, c in (("conv", conv), ("r3m", r3m))}
         for profile in hours["conv"]:
             assert hours["r3m"][profile] > 1.5 * hours["conv"][profile], (policy, profile)
+
+
+def test_reused_steps_are_linked_by_key_and_a_dangling_link_is_relinked_or_dropped(tmp_path):
+    """study/reuse.py without running a step: a finished step (its result.json) of another folder is linked;
+    an unfinished one is not; when that folder moves, the dangling link is replaced from the new place, or
+    removed so that the step runs here."""
+    from lerobot_factorworld.study.reuse import link_reused_steps, reusable_steps
+    from lerobot_factorworld.study.steps import is_done
+
+    other, here = tmp_path / "other", tmp_path / "here"
+    cfg = _cfg(out_dir=str(here))
+    train = make_plan(cfg).of_kind("train")
+    finished, unfinished = train[0], train[1]
+    finished.folder(other).mkdir(parents=True)
+    (finished.folder(other) / "result.json").write_text("{}")
+    unfinished.folder(other).mkdir(parents=True)
+    assert set(reusable_steps(train, here, [str(other)])) == {finished.key}
+    assert link_reused_steps(train, here, [str(other)]) == 1
+    assert finished.folder(here).is_symlink() and is_done(finished, here) and not unfinished.folder(here).exists()
+    assert link_reused_steps(train, here, [str(other)]) == 0  # already linked: nothing to do
+    moved = tmp_path / "moved"
+    other.rename(moved)
+    assert not is_done(finished, here)
+    assert link_reused_steps(train, here, [str(moved)]) == 1 and is_done(finished, here)
+    shutil.rmtree(moved)
+    assert link_reused_steps(train, here, [str(tmp_path)]) == 0
+    assert not finished.folder(here).is_symlink() and not finished.folder(here).exists()

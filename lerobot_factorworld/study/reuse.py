@@ -42,7 +42,13 @@ def reusable_steps(steps: Sequence[Step], study_dir: str | Path, folders: Sequen
 
 
 def link_reused_steps(steps: Sequence[Step], study_dir: str | Path, folders: Sequence[str]) -> int:
-    """Link the :func:`reusable_steps` into ``study_dir`` and return how many."""
+    """Link the :func:`reusable_steps` into ``study_dir`` and return how many. A link left dangling by a
+    study folder that has moved is removed first (it holds nothing of this study's), so the step is linked
+    again from ``folders`` or run here."""
+    for step in steps:
+        folder = step.folder(study_dir)
+        if folder.is_symlink() and not folder.exists():
+            folder.unlink()
     found = reusable_steps(steps, study_dir, folders)
     for step in steps:
         if step.key in found:
