@@ -181,6 +181,56 @@ def test_pairs_are_counted_against_the_papers_band_per_task():
     assert pair_bands(rows, "other", 0.06) == {}
 
 
+def test_methods_are_set_against_the_first_per_factor_and_group():
+    """Two methods on two seeds: the report's "Methods against" table gives each mean gap, their difference
+    and its bootstrap interval, per factor and per section 5.2 group that the study covers."""
+    from lerobot_factorworld.study.aggregate import method_gap_differences
+    from lerobot_factorworld.study.config import StudyConfig
+    from lerobot_factorworld.study.markdown import _methods_section
+    from lerobot_factorworld.study.plan import DEFAULT_WIDTHS
+
+    def row(method, seed, condition, successes):
+        return {
+            "method": method,
+            "task": "door-open",
+            "n_train_envs": 5,
+            "seed": seed,
+            "widths": DEFAULT_WIDTHS,
+            "condition": condition,
+            "n_factors": 1,
+            "success_rate": successes / 20,
+            "episodes": 20,
+            "gap": math.nan if condition == "train" else 1.0 - successes / 20,
+        }
+
+    successes = {  # (method, condition) -> successes of 20 at seeds 0 and 1; train 20/20 everywhere
+        ("none", "camera_pos"): (10, 12),
+        ("none", "table_pos"): (14, 14),
+        ("shift", "camera_pos"): (18, 18),
+        ("shift", "table_pos"): (14, 16),
+    }
+    rows = [row(m, s, "train", 20) for m in ("none", "shift") for s in (0, 1)]
+    rows += [row(m, s, c, k[s]) for (m, c), k in successes.items() for s in (0, 1)]
+    labels = {"camera_pos": ("camera_pos",), "spatial": ("camera_pos", "table_pos")}
+    found = method_gap_differences(rows, ["none", "shift"], labels)
+    (base, gap, diff) = found[("shift", "camera_pos")]
+    assert (base[0], gap[0], diff[0]) == pytest.approx((0.45, 0.1, -0.35))
+    assert diff[1] <= diff[0] <= diff[2] < 0  # resolved: crop shrinks this gap
+    base, gap, diff = found[("shift", "spatial")]
+    assert (base[0], gap[0], diff[0]) == pytest.approx((0.375, 0.175, -0.2))
+    assert method_gap_differences(rows, ["none"], labels) == {}
+    cfg = StudyConfig(
+        factors=["camera_pos", "table_pos"],
+        methods=[
+            {"name": "none", "policy": {"type": "bc", "augmentation": "none"}},
+            {"name": "shift", "policy": {"type": "bc", "augmentation": "shift"}},
+        ],
+    )
+    text = "\n".join(_methods_section(cfg, rows))
+    assert "## Methods against none" in text and "| shift | spatial | +0.375 | +0.175 | -0.200 | [" in text
+    assert "| shift | textures |" not in text  # no texture factor in this study
+
+
 def test_test_environments_do_not_depend_on_the_other_conditions():
     alone = evaluation_suites("pick-place", 2, ["light", "table_texture"], ["light"], 4, seed=3)
     crowded = evaluation_suites(

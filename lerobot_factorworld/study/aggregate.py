@@ -281,6 +281,39 @@ def ordering_rho_interval(
     return float(lo), float(hi)
 
 
+def method_gap_differences(
+    rows: Sequence[dict], methods: Sequence[str], labels: Mapping[str, Sequence[str]]
+) -> dict[tuple[str, str], tuple[Interval, Interval, Interval]]:
+    """Every method after the first against the first: per (method, label), the mean gap over the label's
+    factors (and tasks, N; then seeds) of the first method, of this one, and their difference (this minus
+    the first: negative when this method shrinks the gap), each with its 95% seed-bootstrap interval (main
+    grid; one bootstrap, so all share their replicates)."""
+    factors = {f for names in labels.values() for f in names}
+    grid = [r for r in main_grid(rows) if r["method"] in methods and r["condition"] in (TRAIN_SUITE, *factors)]
+    table = cells(grid, gaps=True)
+    wanted = [(m, label) for m in methods for label in labels]
+    groups = [[i for i, k in enumerate(table.keys) if k[0] == m and k[4] in labels[label]] for m, label in wanted]
+    present = [(w, g) for w, g in zip(wanted, groups) if g]
+    if not present or len(methods) < 2:
+        return {}
+    train = table.train_columns()
+    point, reps = table.bootstrap(lambda r, n: group_mean(cell_gaps(r, train), [g for _, g in present]))
+    index = {w: i for i, (w, _) in enumerate(present)}
+    out = {}
+    base = methods[0]
+    for method in methods[1:]:
+        for label in labels:
+            if (method, label) not in index or (base, label) not in index:
+                continue
+            i, j = index[(method, label)], index[(base, label)]
+            intervals = _interval(
+                np.array([point[j], point[i], point[i] - point[j]]),
+                np.stack([reps[:, j], reps[:, i], reps[:, i] - reps[:, j]], axis=-1),
+            )
+            out[(method, label)] = (intervals[0], intervals[1], intervals[2])
+    return out
+
+
 @dataclass(frozen=True)
 class PairSummary:
     """The pair metric of one method, both ways, with 95% seed-bootstrap intervals.

@@ -18,6 +18,7 @@ from .aggregate import (
     gap_per_factor_and_n,
     gap_per_radius,
     main_grid,
+    method_gap_differences,
     ordering_rho_interval,
     pair_bands,
     pair_rows,
@@ -32,6 +33,7 @@ from .aggregate import (
 from .config import StudyConfig
 from .metrics import BOOTSTRAP_RESAMPLES, BOOTSTRAP_SEED, rank_hardest_first, rerank, spearman
 from .paper import (
+    PAPER_FACTOR_GROUPS,
     PAPER_FACTOR_RANKS,
     PAPER_FACTOR_RANKS_STATED,
     PAPER_ORDERING,
@@ -131,6 +133,7 @@ def render(
     lines += _ordering_section(cfg, rows)
     lines += family_sections(FAMILY_RESULTS)
     lines += _gap_table(cfg, rows)
+    lines += _methods_section(cfg, rows)
     lines += _pairs_section(cfg, rows)
     lines += _radius_section(cfg, rows)
     lines += _success_table(cfg, rows)
@@ -253,6 +256,37 @@ def _gap_table(cfg: StudyConfig, rows: list[dict]) -> list[str]:
             if any(cells):
                 lines.append(
                     f"| {method.name} | {condition} | " + " | ".join(pm(*c[:2]) if c else "n/a" for c in cells) + " |"
+                )
+    lines.append("")
+    return lines
+
+
+def _methods_section(cfg: StudyConfig, rows: list[dict]) -> list[str]:
+    methods = [m.name for m in cfg.methods]
+    labels = {f: (f,) for f in cfg.shifted_factors()}
+    labels.update({name: group for name, group in PAPER_FACTOR_GROUPS.items() if set(group) <= set(labels)})
+    labels["all factors"] = tuple(cfg.shifted_factors())
+    found = method_gap_differences(rows, methods, labels)
+    if not found:
+        return []
+    base = methods[0]
+    lines = [
+        f"## Methods against {base} (mean gap over tasks and N)",
+        "",
+        f"Each method's mean gap next to {base}'s on the same conditions, and the difference (negative: the method "
+        f"shrinks the gap), each with its 95% bootstrap interval. Groups of factors are section 5.2's: "
+        + "; ".join(f"{name} = {', '.join(group)}" for name, group in PAPER_FACTOR_GROUPS.items())
+        + ". A method with a lower P_T has less gap to lose: read the difference with its success rates below.",
+        "",
+        f"| method | factors | gap of {base} | gap of the method | difference | 95% interval |",
+        "|---|---|---|---|---|---|",
+    ]
+    for method in methods[1:]:
+        for label in labels:
+            if (method, label) in found:
+                base_gap, gap, diff = found[(method, label)]
+                lines.append(
+                    f"| {method} | {label} | {base_gap[0]:+.3f} | {gap[0]:+.3f} | {diff[0]:+.3f} | {ci(*diff[1:])} |"
                 )
     lines.append("")
     return lines

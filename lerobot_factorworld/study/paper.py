@@ -56,3 +56,12 @@ PAPER_ORDERING = (
 )
 PAPER_PAIR_TOLERANCE = 0.06  # a pair "adds up" when its pair metric is within +-6% (section 5.2)
 PAPER_PAIRS_WITHIN = "16 of 21"  # pairs within the tolerance in the paper
+
+PAPER_FACTOR_GROUPS: dict[str, tuple[str, ...]] = {
+    # How section 5.2 (Fig. 5) speaks of the seven factors when it asks which augmentation helps which: crop
+    # (our `shift`) helps the spatial factors and also non-spatial ones; photometric distortion (our `color`)
+    # helps the textures.
+    "spatial": ("camera_pos", "table_pos"),
+    "textures": ("object_texture", "table_texture", "floor_texture"),
+    "lighting and distractors": ("light", "distractors"),
+}
