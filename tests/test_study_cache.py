@@ -297,3 +297,29 @@ def test_reused_steps_are_linked_by_key_and_a_dangling_link_is_relinked_or_dropp
     shutil.rmtree(moved)
     assert link_reused_steps(train, here, [str(tmp_path)]) == 0
     assert not finished.folder(here).is_symlink() and not finished.folder(here).exists()
+
+
+def test_a_per_task_step_limit_changes_only_that_tasks_evaluations():
+    """``eval.max_episode_steps_per_task``: bin-picking at 500 steps beside door-open at 200 keeps door-open's
+    evaluation keys (a finished study's steps stay reusable) and changes bin-picking's; names are checked."""
+    from lerobot_factorworld.study.markdown import _step_limits
+
+    tasks = ["door-open", "bin-picking"]
+    common = _cfg(tasks=tasks, n_train_envs=[1], eval={"n_test_envs": 2, "episodes": 2, "max_episode_steps": 200})
+    longer = replace(common, eval=replace(common.eval, max_episode_steps_per_task={"bin-picking": 500}))
+
+    def by_task(cfg):
+        return {(s.meta["task"], s.meta["condition"]): s for s in make_plan(cfg).of_kind("eval")}
+
+    before, after = by_task(common), by_task(longer)
+    for (task, condition), step in after.items():
+        assert (step.key == before[(task, condition)].key) == (task == "door-open")
+        assert step.inputs["max_episode_steps"] == (500 if task == "bin-picking" else 200)
+    assert _keys(longer, "train") == _keys(common, "train")
+    assert _step_limits(common) == "200 steps" and _step_limits(longer) == "200 steps (bin-picking: 500)"
+    unset = replace(common, eval=replace(common.eval, max_episode_steps=None))
+    assert _step_limits(unset) == "500 steps"  # both tasks' own horizon is Meta-World's 500
+    with pytest.raises(ValueError, match="names 'pick-place', not a task of this study"):
+        replace(common, eval=replace(common.eval, max_episode_steps_per_task={"pick-place": 500}))
+    with pytest.raises(ValueError, match=r"max_episode_steps_per_task\[bin-picking\] must be at least 1"):
+        replace(common, eval=replace(common.eval, max_episode_steps_per_task={"bin-picking": 0}))

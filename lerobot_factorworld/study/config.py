@@ -319,6 +319,9 @@ class EvalSettings:
         episodes: Episodes per condition; a multiple of every N and of ``n_test_envs``.
         start_seed: Episode ``i`` is reset with ``start_seed + i`` in every condition (paired).
         max_episode_steps: Step limit of an episode (``None``: the task's horizon).
+        max_episode_steps_per_task: Per-task override of ``max_episode_steps`` (e.g. ``{bin-picking: 500}``:
+            bin-picking's policies finish later than the other tasks', docs/findings.md); the other tasks'
+            evaluations, and their keys, stay as they are.
         device: Where the policy runs during evaluation (``cpu``, ``cuda``, ``cuda:<index>``, ``mps``);
             in the step's key (GPU kernels need not give the CPU's actions bit for bit).
         batch_size: Vectorised environments per evaluation (results do not depend on it: not in the key).
@@ -329,9 +332,13 @@ class EvalSettings:
     episodes: int = 20
     start_seed: int = 1000
     max_episode_steps: int | None = None
+    max_episode_steps_per_task: dict[str, int] = field(default_factory=dict)
     device: str = "cpu"
     batch_size: int = 1
     threads: int = 1
+
+    def max_steps_for(self, task: str) -> int | None:
+        return self.max_episode_steps_per_task.get(task, self.max_episode_steps)
 
 
 RUN_CONFIG_FILE = "config.json"  # the settings a study ran with, written into its folder by every run
@@ -612,6 +619,16 @@ class StudyConfig:
                 )
             if ev.episodes % n:
                 raise ValueError(f"eval.episodes={ev.episodes} must be a multiple of every N (got N={n})")
+        for task, limit in ev.max_episode_steps_per_task.items():
+            if task not in self.tasks:
+                raise ValueError(
+                    f"eval.max_episode_steps_per_task names {task!r}, not a task of this study "
+                    f"(tasks: {', '.join(self.tasks)})"
+                )
+            if int(limit) < 1:
+                raise ValueError(f"eval.max_episode_steps_per_task[{task}] must be at least 1, got {limit}")
+        if ev.max_episode_steps is not None and ev.max_episode_steps < 1:
+            raise ValueError(f"eval.max_episode_steps must be at least 1, got {ev.max_episode_steps}")
         if ev.episodes % ev.n_test_envs:
             raise ValueError(
                 f"eval.episodes={ev.episodes} must be a multiple of eval.n_test_envs={ev.n_test_envs}, so that every "

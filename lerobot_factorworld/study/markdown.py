@@ -11,6 +11,7 @@ from pathlib import Path
 
 from ..core.provenance import UNKNOWN
 from ..protocol.conditions import TRAIN_SUITE
+from ..tasks import get_task
 from .aggregate import (
     RADIUS_STEP_M,
     factor_gap_intervals,
@@ -113,7 +114,8 @@ def render(
         *_extra_data_lines(cfg),
         f"- Evaluation: {ev.episodes} episodes per condition and checkpoint (episode i reset with seed "
         f"{ev.start_seed}+i in every condition, so object starts are paired), {ev.n_test_envs} test environments "
-        "per shifted condition drawn from the held-out split, the N training environments for `train`.",
+        "per shifted condition drawn from the held-out split, the N training environments for `train`; an "
+        f"episode ends at success or after {_step_limits(cfg)}.",
         "- Success rates carry Wilson 95% intervals; gaps P_T - P_F carry Newcombe's paired 95% intervals (in "
         "the CSV). Aggregates below: mean over tasks (and over N where stated) per seed, then mean ± standard "
         "error over seeds"
@@ -171,6 +173,18 @@ def _extra_data_lines(cfg: StudyConfig) -> list[str]:
                 "demos and gradient steps are those of the same method without them."
             )
     return lines
+
+
+def _step_limits(cfg: StudyConfig) -> str:
+    """``200 steps``, ``200 steps (bin-picking: 500)`` or ``the task's horizon (pick-place: 500, ...)``."""
+    limits = {task: cfg.eval.max_steps_for(task) or get_task(task).max_episode_steps for task in cfg.tasks}
+    if len(set(limits.values())) == 1:
+        return f"{next(iter(limits.values()))} steps"
+    common = cfg.eval.max_episode_steps
+    if common is None:
+        return "the task's step limit (" + ", ".join(f"{t}: {n}" for t, n in limits.items()) + ")"
+    others = ", ".join(f"{t}: {n}" for t, n in limits.items() if n != common)
+    return f"{common} steps ({others})"
 
 
 def _given_lines(cfg: StudyConfig, rows: list[dict]) -> list[str]:

@@ -155,7 +155,7 @@ def _eval_step(cfg: StudyConfig, condition: str, train: Step, collect: Step, lab
     """One condition of one checkpoint; batch size and threads do not change results (kept out of the key),
     and ``train`` (the dataset's own environments) does not depend on ``n_test_envs``."""
     run = {"batch_size": cfg.eval.batch_size, "threads": cfg.eval.threads}
-    inputs = _eval_inputs(cfg, condition)
+    inputs = _eval_inputs(cfg, condition, labels["task"])
     return Step("eval", inputs.to_dict(), (train.key, collect.key), {**labels, "condition": condition, RUN: run})
 
 
@@ -165,17 +165,17 @@ def _given_eval_step(
     """One condition of a given checkpoint: no dependency; the key holds the checkpoint's content hash
     (``keyed``) and the environments (where the checkpoint lies travels in ``run``)."""
     run = {"batch_size": cfg.eval.batch_size, "threads": cfg.eval.threads, GIVEN_CHECKPOINT: checkpoint}
-    inputs = replace(_eval_inputs(cfg, condition), checkpoint=keyed[checkpoint], environments=env)
+    inputs = replace(_eval_inputs(cfg, condition, labels["task"]), checkpoint=keyed[checkpoint], environments=env)
     return Step("eval", inputs.to_dict(), (), {**labels, "condition": condition, RUN: run})
 
 
-def _eval_inputs(cfg: StudyConfig, condition: str) -> EvalInputs:
+def _eval_inputs(cfg: StudyConfig, condition: str, task: str) -> EvalInputs:
     ev = cfg.eval
     return EvalInputs(
         condition=condition,
         episodes=ev.episodes,
         start_seed=ev.start_seed,
-        max_episode_steps=ev.max_episode_steps,
+        max_episode_steps=ev.max_steps_for(task),
         device=ev.device,
         versions=versions(),
         n_test_envs=None if condition == TRAIN_SUITE else ev.n_test_envs,
