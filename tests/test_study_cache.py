@@ -301,7 +301,8 @@ def test_reused_steps_are_linked_by_key_and_a_dangling_link_is_relinked_or_dropp
 
 def test_a_per_task_step_limit_changes_only_that_tasks_evaluations():
     """``eval.max_episode_steps_per_task``: bin-picking at 500 steps beside door-open at 200 keeps door-open's
-    evaluation keys (a finished study's steps stay reusable) and changes bin-picking's; names are checked."""
+    evaluation keys (a finished study's steps stay reusable) and changes bin-picking's; a task the study leaves
+    out is ignored (``--tasks`` narrows a config), an unknown one refused."""
     from lerobot_factorworld.study.markdown import _step_limits
 
     tasks = ["door-open", "bin-picking"]
@@ -319,7 +320,9 @@ def test_a_per_task_step_limit_changes_only_that_tasks_evaluations():
     assert _step_limits(common) == "200 steps" and _step_limits(longer) == "200 steps (bin-picking: 500)"
     unset = replace(common, eval=replace(common.eval, max_episode_steps=None))
     assert _step_limits(unset) == "500 steps"  # both tasks' own horizon is Meta-World's 500
-    with pytest.raises(ValueError, match="names 'pick-place', not a task of this study"):
-        replace(common, eval=replace(common.eval, max_episode_steps_per_task={"pick-place": 500}))
+    narrowed = replace(common, eval=replace(common.eval, max_episode_steps_per_task={"pick-place": 500}))
+    assert {s.key for s in by_task(narrowed).values()} == {s.key for s in before.values()}  # not in the study
+    with pytest.raises(ValueError, match="unknown task 'pick-plaice'"):
+        replace(common, eval=replace(common.eval, max_episode_steps_per_task={"pick-plaice": 500}))
     with pytest.raises(ValueError, match=r"max_episode_steps_per_task\[bin-picking\] must be at least 1"):
         replace(common, eval=replace(common.eval, max_episode_steps_per_task={"bin-picking": 0}))
