@@ -44,6 +44,7 @@ PUBLISHED = {
     "f1_pick-place_seed0": ROOT / "docs" / "findings.md",
     "f9_pick": ROOT / "docs" / "findings.md",
     "f3_pairs": ROOT / "docs" / "findings.md",
+    "f5_augmentation": ROOT / "docs" / "findings.md",
     "f1_bin-picking_seed0": ROOT / "docs" / "findings.md",
     "f7_object_texture_images": ROOT / "docs" / "findings.md",
     "f7_object_texture_colours": ROOT / "docs" / "findings.md",
