@@ -46,6 +46,7 @@ PUBLISHED = {
     "f3_pairs": ROOT / "docs" / "findings.md",
     "f5_augmentation": ROOT / "docs" / "findings.md",
     "f1_bin-picking_seed0": ROOT / "docs" / "findings.md",
+    "f1_bin-picking_seed1": ROOT / "docs" / "findings.md",
     "f7_object_texture_images": ROOT / "docs" / "findings.md",
     "f7_object_texture_colours": ROOT / "docs" / "findings.md",
     "bp60_cap200": ROOT / "docs" / "findings.md",
