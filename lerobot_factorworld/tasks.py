@@ -177,6 +177,11 @@ def get_task(name: str) -> TaskSpec:
     return TASKS[key]
 
 
+def step_limit(task: str, limit: int | None = None) -> int:
+    """An episode's step limit: ``limit`` when set, else the task's horizon (``max_episode_steps``)."""
+    return limit or get_task(task).max_episode_steps
+
+
 def check_tasks(task: str | Sequence[str] | None) -> list[str]:
     """Task names (comma-separated) -> canonical names; at least one, each once."""
     names = [get_task(name).name for name in split_list(task)]

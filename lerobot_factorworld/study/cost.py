@@ -33,7 +33,7 @@ from typing import Any
 from ..core import provenance
 from ..core.io import atomic_write_json
 from ..envs.lerobot_obs import LEROBOT_METAWORLD_OBS
-from ..tasks import get_task
+from ..tasks import get_task, step_limit
 from .checkpoint import GIVEN_CHECKPOINT, checkpoint_problems, local_folder, read_policy_config
 from .config import StudyConfig
 from .executors import task_units
@@ -151,7 +151,7 @@ def _eval_cost(
 ) -> tuple[float, float]:
     """An evaluation's cost: the same model for a trained and a given checkpoint, but for a step of LeRobot's
     observation (a 480 px frame with shadows, not the small frames the constant was fitted on)."""
-    horizon = ev.max_episode_steps or get_task(env.task).max_episode_steps
+    horizon = step_limit(env.task, ev.max_episode_steps)
     sim_steps = ev.episodes * horizon * episode_fraction(model, env.task)
     step_s = model["eval"]["sim_step_s"]
     if isinstance(env, EnvInputs) and env.obs == LEROBOT_METAWORLD_OBS:
@@ -321,7 +321,7 @@ def fit_constants(plan: Plan, study_dir: str | Path) -> dict[str, Any]:
             inputs = EvalInputs.from_dict(step.inputs)
             env = inputs.environments or CollectInputs.from_dict(index[step.deps[-1]].inputs)
             task = env.task
-            horizon = inputs.max_episode_steps or get_task(task).max_episode_steps
+            horizon = step_limit(task, inputs.max_episode_steps)
             work["eval"] += variable
             units["eval"] += result.get("env_steps", 0)
             steps_run.setdefault(task, []).extend([result.get("env_steps", 0), inputs.episodes * horizon])

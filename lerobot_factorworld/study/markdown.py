@@ -11,7 +11,7 @@ from pathlib import Path
 
 from ..core.provenance import UNKNOWN
 from ..protocol.conditions import TRAIN_SUITE
-from ..tasks import get_task
+from ..tasks import step_limit
 from .aggregate import (
     RADIUS_STEP_M,
     factor_gap_intervals,
@@ -176,8 +176,8 @@ def _extra_data_lines(cfg: StudyConfig) -> list[str]:
 
 
 def _step_limits(cfg: StudyConfig) -> str:
-    """``200 steps``, ``200 steps (bin-picking: 500)`` or ``the task's horizon (pick-place: 500, ...)``."""
-    limits = {task: cfg.eval.max_steps_for(task) or get_task(task).max_episode_steps for task in cfg.tasks}
+    """``200 steps``, ``200 steps (bin-picking: 500)`` or ``the task's step limit (pick-place: 500, ...)``."""
+    limits = {task: step_limit(task, cfg.eval.max_steps_for(task)) for task in cfg.tasks}
     if len(set(limits.values())) == 1:
         return f"{next(iter(limits.values()))} steps"
     common = cfg.eval.max_episode_steps
