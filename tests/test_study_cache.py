@@ -326,3 +326,17 @@ def test_a_per_task_step_limit_changes_only_that_tasks_evaluations():
         replace(common, eval=replace(common.eval, max_episode_steps_per_task={"pick-plaice": 500}))
     with pytest.raises(ValueError, match=r"max_episode_steps_per_task\[bin-picking\] must be at least 1"):
         replace(common, eval=replace(common.eval, max_episode_steps_per_task={"bin-picking": 0}))
+    v3 = replace(common, eval=replace(common.eval, max_episode_steps_per_task={"bin-picking-v3": 500}))
+    assert {s.key for s in by_task(v3).values()} == {s.key for s in after.values()}  # Meta-World's spelling folded
+
+
+def test_per_task_demos_fold_the_v3_spelling_and_refuse_unknown_tasks():
+    """``collect.demos_per_task`` names tasks like ``eval.max_episode_steps_per_task``: the ``-v3`` spelling is
+    the same task, a typo is refused naming the valid tasks (it used to fall back to ``demos`` silently)."""
+    common = _cfg(tasks=["door-open"], n_train_envs=[1], eval={"n_test_envs": 2, "episodes": 2})
+    more = replace(common, collect=replace(common.collect, demos_per_task={"door-open": 7}))
+    assert more.collect.demos_for("door-open") == 7 and more.collect.demos_for("door-open-v3") == 7
+    spelled = replace(common, collect=replace(common.collect, demos_per_task={"door-open-v3": 7}))
+    assert _keys(spelled, "collect") == _keys(more, "collect") != _keys(common, "collect")
+    with pytest.raises(ValueError, match="collect.demos_per_task: unknown task 'door-opne'; valid tasks: .*door-open"):
+        replace(common, collect=replace(common.collect, demos_per_task={"door-opne": 7}))

@@ -224,6 +224,19 @@ def check_policy(method: MethodConfig) -> None:
         quiet.level = level
 
 
+def per_task_setting(setting: str, values: dict[str, Any]) -> dict[str, Any]:
+    """A per-task override (``{task: value}``) keyed by task names, the Meta-World ``-v3`` spelling folded.
+    A task the study leaves out is fine (``--tasks`` may narrow a config); an unknown one is refused,
+    naming the valid tasks, before any work starts."""
+    out = {}
+    for task, value in values.items():
+        try:
+            out[get_task(str(task)).name] = value
+        except ValueError as err:  # "unknown task 'x'; valid tasks: ..."
+            raise ValueError(f"{setting}: {err}") from None
+    return out
+
+
 @dataclass
 class CollectSettings:
     """Scripted demonstrations per (task, N, seed) dataset (``factorworld collect``).
@@ -261,6 +274,7 @@ class CollectSettings:
     workers: int = 1
 
     def __post_init__(self) -> None:
+        self.demos_per_task = per_task_setting("collect.demos_per_task", self.demos_per_task)
         if self.rgb_fraction is not None:
             try:
                 SamplingOptions(rgb_fraction=self.rgb_fraction)
@@ -273,7 +287,7 @@ class CollectSettings:
         return DEFAULT_RGB_FRACTION if self.rgb_fraction is None else float(self.rgb_fraction)
 
     def demos_for(self, task: str) -> int:
-        return int(self.demos_per_task.get(task, self.demos))
+        return int(self.demos_per_task.get(get_task(task).name, self.demos))
 
     def family_options_for(self, task: str) -> dict[str, Any]:
         """The sampling options ``task``'s family reads (``SamplingOptions`` fields named in its
@@ -337,8 +351,13 @@ class EvalSettings:
     batch_size: int = 1
     threads: int = 1
 
+    def __post_init__(self) -> None:
+        self.max_episode_steps_per_task = per_task_setting(
+            "eval.max_episode_steps_per_task", self.max_episode_steps_per_task
+        )
+
     def max_steps_for(self, task: str) -> int | None:
-        return self.max_episode_steps_per_task.get(task, self.max_episode_steps)
+        return self.max_episode_steps_per_task.get(get_task(task).name, self.max_episode_steps)
 
 
 RUN_CONFIG_FILE = "config.json"  # the settings a study ran with, written into its folder by every run
@@ -619,8 +638,7 @@ class StudyConfig:
                 )
             if ev.episodes % n:
                 raise ValueError(f"eval.episodes={ev.episodes} must be a multiple of every N (got N={n})")
-        for task, limit in ev.max_episode_steps_per_task.items():
-            get_task(task)  # a known task (one the study leaves out is fine: `--tasks` may narrow a config)
+        for task, limit in ev.max_episode_steps_per_task.items():  # known tasks (per_task_setting)
             if int(limit) < 1:
                 raise ValueError(f"eval.max_episode_steps_per_task[{task}] must be at least 1, got {limit}")
         if ev.max_episode_steps is not None and ev.max_episode_steps < 1:
