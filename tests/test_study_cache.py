@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import os
 import shutil
 from dataclasses import replace
 from pathlib import Path
@@ -273,9 +274,9 @@ def test_frozen_resnet_encoders_cost_more_than_the_conv_encoder(tmp_path, monkey
 
 
 def test_reused_steps_are_linked_by_key_and_a_dangling_link_is_relinked_or_dropped(tmp_path):
-    """study/reuse.py without running a step: a finished step (its result.json) of another folder is linked;
-    an unfinished one is not; when that folder moves, the dangling link is replaced from the new place, or
-    removed so that the step runs here."""
+    """study/reuse.py without running a step: a finished step (its result.json) of another folder is linked
+    (relatively: both folders may move together); an unfinished one is not; when that folder moves alone, the
+    dangling link is replaced from the new place, or removed so that the step runs here."""
     from lerobot_factorworld.study.reuse import link_reused_steps, reusable_steps
     from lerobot_factorworld.study.steps import is_done
 
@@ -290,6 +291,11 @@ def test_reused_steps_are_linked_by_key_and_a_dangling_link_is_relinked_or_dropp
     assert link_reused_steps(train, here, [str(other)]) == 1
     assert finished.folder(here).is_symlink() and is_done(finished, here) and not unfinished.folder(here).exists()
     assert link_reused_steps(train, here, [str(other)]) == 0  # already linked: nothing to do
+    assert not os.path.isabs(os.readlink(finished.folder(here)))
+    together = tmp_path / "together"
+    together.mkdir()
+    other, here = other.rename(together / "other"), here.rename(together / "here")
+    assert is_done(finished, here)  # moved together: the link still holds
     moved = tmp_path / "moved"
     other.rename(moved)
     assert not is_done(finished, here)

@@ -6,11 +6,13 @@ same seed-0 datasets, and F3's and F5's single-factor evaluations are F1's. The 
 is linked (a symlink, never a copy: checkpoints and datasets are large) into this study's ``steps/``; its
 ``result.json`` keeps the provenance of the code that made it, so stale checks and ``results.csv`` name that
 code. Only finished steps (with a ``result.json``) are linked, and only where this study has no folder of its
-own for the key, so nothing here is replaced. Both studies' folders must stay where they are.
+own for the key, so nothing here is replaced. Links are relative, so the two study folders may move together
+(e.g. a runs folder copied to another machine); moved apart, the next run relinks from ``reuse_from``.
 """
 
 from __future__ import annotations
 
+import os
 from collections.abc import Sequence
 from pathlib import Path
 
@@ -54,5 +56,6 @@ def link_reused_steps(steps: Sequence[Step], study_dir: str | Path, folders: Seq
         if step.key in found:
             target = step.folder(study_dir)
             target.parent.mkdir(parents=True, exist_ok=True)
-            target.symlink_to(found[step.key].resolve(), target_is_directory=True)
+            source = os.path.relpath(found[step.key].resolve(), target.parent.resolve())
+            target.symlink_to(source, target_is_directory=True)
     return len(found)
