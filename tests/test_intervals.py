@@ -134,6 +134,14 @@ def test_intervals_cover_the_point_estimates_which_match_the_tables():
     low, high = aggregate.ordering_rho_interval(rows, "bc", FACTORS, PAPER_FACTOR_RANKS)
     assert -1 <= low < high <= 1 and high > 0.5
 
+    differences = aggregate.factor_gap_differences(rows, "bc", FACTORS)
+    assert len(differences) == 21 and set(differences) <= {
+        (a, b) for i, a in enumerate(FACTORS) for b in FACTORS[i + 1 :]
+    }
+    for (a, b), (point, low, high) in differences.items():
+        assert point == pytest.approx(ordering[a][0] - ordering[b][0]) and low <= point <= high
+    # the hardest synthetic factor (drop 0.3) is resolved from the two with none; those two are not resolved
+    assert differences[(FACTORS[0], FACTORS[-1])][1] > 0 and differences[(FACTORS[-2], FACTORS[-1])][1] <= 0
     pairs = aggregate.pair_summary(rows, "bc", 0.06)
     table = aggregate.summary(aggregate.pair_rows(rows), "pair_metric", ["method", "pair"])
     assert len(pairs.per_cell) == 21 and pairs.pairs_per_cell == 21
@@ -201,6 +209,11 @@ def test_the_report_prints_intervals_for_rho_pairs_slopes_and_pooled_tables():
     assert "95% interval (bootstrap)" in ordering
     assert "Spearman correlation with the paper's ordering over 7 factors: **" in ordering
     assert "95% interval [+" in ordering or "95% interval [-" in ordering
+    assert "### Which factors are resolved from each other (bc)" in ordering
+    hardest = f"| {FACTORS[0]} | "
+    resolved = ordering.split("### Which factors are resolved")[1]
+    row = next(line for line in resolved.splitlines() if line.startswith(hardest))
+    assert f"{FACTORS[-1]} +0." in row  # resolved from the factors with no gap, with its difference
     pairs = "\n".join(_pairs_section(cfg, rows))
     assert "95% bootstrap interval of the count" in pairs and "with the pooled one" in pairs
     assert "| bc | camera_pos+object_texture | " in pairs

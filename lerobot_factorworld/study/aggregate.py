@@ -12,6 +12,7 @@ cell; ``BOOTSTRAP_RESAMPLES`` resamples from the fixed ``BOOTSTRAP_SEED``).
 
 from __future__ import annotations
 
+import itertools
 import math
 from collections import defaultdict
 from collections.abc import Callable, Iterable, Mapping, Sequence
@@ -266,6 +267,19 @@ def factor_gap_intervals(rows: Sequence[dict], method: str, factors: Sequence[st
     """Per factor: mean gap of ``method`` (over tasks, N, seeds) with its 95% seed-bootstrap interval."""
     names, point, reps = factor_gap_replicates(rows, method, factors)
     return dict(zip(names, _interval(point, reps))) if names else {}
+
+
+def factor_gap_differences(
+    rows: Sequence[dict], method: str, factors: Sequence[str]
+) -> dict[tuple[str, str], Interval]:
+    """Every pair (a, b) of ``factors`` with data, a listed before b: ``method``'s mean gap of a minus that of b
+    (:func:`factor_ordering`), with its 95% seed-bootstrap interval. One bootstrap gives both gaps, so the
+    interval keeps what they share (the same train cells): the test of whether the ordering resolves a from b."""
+    names, point, reps = factor_gap_replicates(rows, method, factors)
+    return {
+        (names[i], names[j]): _interval(point[i] - point[j], reps[:, i] - reps[:, j])[0]
+        for i, j in itertools.combinations(range(len(names)), 2)
+    }
 
 
 def ordering_rho_interval(

@@ -14,6 +14,7 @@ from ..protocol.conditions import TRAIN_SUITE
 from ..tasks import step_limit
 from .aggregate import (
     RADIUS_STEP_M,
+    factor_gap_differences,
     factor_gap_intervals,
     factor_ordering,
     gap_per_factor_and_n,
@@ -253,6 +254,35 @@ def _ordering_section(cfg: StudyConfig, rows: list[dict]) -> list[str]:
         else:
             lines.append("The ordering agrees with the paper's (no shared factor moves by a whole rank).")
     lines.append(PAPER_ORDERING)
+    lines.append("")
+    return lines + _resolved_factors(rows, method, sorted(gaps, key=lambda f: ours.get(f, 99)))
+
+
+def _resolved_factors(rows: list[dict], method: str, hardest_first: list[str]) -> list[str]:
+    """Which factors' mean gaps the study tells apart: per factor, the easier factors whose difference to it has
+    a 95% bootstrap interval above 0, and those it is not resolved from."""
+    if len(hardest_first) < 2:
+        return []
+    differences = factor_gap_differences(rows, method, hardest_first)
+    lines = [
+        f"### Which factors are resolved from each other ({method})",
+        "",
+        "A factor's gap is resolved from another's when the 95% bootstrap interval of the difference of their mean "
+        "gaps (one bootstrap for all factors, so what their cells share is kept) excludes 0.",
+        "",
+        "| factor (hardest first) | larger than (difference, 95% interval) | not resolved from |",
+        "|---|---|---|",
+    ]
+    both = {**differences, **{(b, a): (-p, -high, -low) for (a, b), (p, low, high) in differences.items()}}
+    for factor in hardest_first:
+        larger, unresolved = [], []
+        for other in (f for f in hardest_first if f != factor):
+            point, low, high = both[(factor, other)]
+            if low > 0:
+                larger.append(f"{other} {point:+.3f} {ci(low, high)}")
+            elif high >= 0:
+                unresolved.append(other)
+        lines.append(f"| {factor} | {'; '.join(larger) or '—'} | {', '.join(unresolved) or '—'} |")
     lines.append("")
     return lines
 
