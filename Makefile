@@ -3,7 +3,7 @@ VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 
-.PHONY: setup demo contact-sheet test test-fast lint bench
+.PHONY: setup demo findings contact-sheet test test-fast lint bench
 
 setup: $(STAMP)
 
@@ -15,6 +15,11 @@ $(STAMP): pyproject.toml scripts/setup.sh
 # on 2 cores; writes outputs/study/quick/report.md, results.csv and the plots. Rerunning reuses its steps.
 demo: setup
 	MUJOCO_GL=egl $(BIN)/factorworld study --config configs/study/quick.yaml
+
+# Every finding of docs/findings.md, each reusing the steps of those before it: 12-15 hours on 2 cores,
+# resumable (run it again to go on). DRY_RUN=1 prints each one's cost and power; ONLY="f3_pairs ..." some.
+findings: setup
+	bash scripts/run_findings.sh
 
 # A contact sheet of pick-place under every factor of variation.
 contact-sheet: setup

@@ -5,6 +5,8 @@ dataset), and a toy study end to end (collect, train, evaluate, report), cached,
 import filecmp
 import logging
 import math
+import os
+import re
 import subprocess
 import sys
 from dataclasses import replace
@@ -616,6 +618,17 @@ def test_findings_configs_share_one_recipe_and_their_own_folders():
         if cfg.tasks != ["pick"]:
             assert cfg.collect.demos == recipe.collect.demos, name
             assert cfg.collect.action_noise == recipe.collect.action_noise, name
+
+
+def test_run_findings_runs_every_findings_config_and_refuses_an_unknown_one():
+    """scripts/run_findings.sh lists every config under configs/study/findings/ once (a new finding is not
+    left out of "run them all"); a misspelt name is one error line naming the valid ones, before anything runs."""
+    script = ROOT / "scripts" / "run_findings.sh"
+    listed = re.search(r"FINDINGS=\(\n(.*?)\n\)", script.read_text(), re.S).group(1).split()
+    assert sorted(listed) == sorted(Path(name).stem for name in FINDINGS) and len(set(listed)) == len(listed)
+    proc = subprocess.run(["bash", str(script)], env={**os.environ, "ONLY": "f3_pair"}, capture_output=True, text=True)
+    assert proc.returncode == 2 and proc.stderr.startswith("error: unknown finding 'f3_pair'; valid: f3_pairs ")
+    assert proc.stderr.count("\n") == 1 and not proc.stdout
 
 
 def test_study_datasets_store_lossless_frames_by_default():

@@ -1,0 +1,44 @@
+#!/usr/bin/env bash
+# Every finding of docs/findings.md, one study after another, each reusing the finished steps of the studies
+# before it (`reuse_from`: a step with the same key is the same result, docs/study.md). The order makes the most
+# of that: F3's seed-0 datasets, trainings and single-factor evaluations are also F1's, F5's, F6's and F8's, and
+# F1's N = 5 steps are F2's, F4's and F8's. Resumable: run it again and it goes on where it stopped (finished
+# steps are never redone). About 12-15 hours on 2 cores; one study at a time uses both.
+#   bash scripts/run_findings.sh                              # run all, into outputs/study/findings/<config>/
+#   DRY_RUN=1 bash scripts/run_findings.sh                    # each study's --dry-run (steps, cost, power)
+#   ONLY="f3_pairs f1_ordering" bash scripts/run_findings.sh  # some of them, in this script's order
+# Publish one as docs/findings.md says ("factorworld report ... --out=docs/results/<config>").
+set -euo pipefail
+cd "$(dirname "$0")/.."
+BIN=${BIN:-.venv/bin}
+OUT=${OUT:-outputs/study/findings}
+export MUJOCO_GL=${MUJOCO_GL:-egl}
+
+FINDINGS=(
+  f3_pairs
+  f1_ordering
+  f5_augmentation
+  f8_out_of_domain
+  f2_gap_vs_n
+  f4_radius
+  f6_pretrained
+  f7_object_texture_images
+  f7_object_texture_colours
+  f7_object_texture_168px
+  f9_pick
+)
+
+for name in ${ONLY:-}; do
+  [[ " ${FINDINGS[*]} " == *" $name "* ]] || { echo "error: unknown finding '$name'; valid: ${FINDINGS[*]}" >&2; exit 2; }
+done
+
+done_folders=()
+for name in "${FINDINGS[@]}"; do
+  if [[ -z "${ONLY:-}" || " $ONLY " == *" $name "* ]]; then
+    reuse=$(IFS=,; echo "${done_folders[*]}")
+    echo "== $name${reuse:+ (reusing $reuse)}"
+    "$BIN/factorworld" study --config "configs/study/findings/$name.yaml" --out_dir="$OUT/$name" \
+      ${reuse:+--reuse_from=[$reuse]} ${DRY_RUN:+--dry-run}
+  fi
+  [[ -d "$OUT/$name/steps" ]] && done_folders+=("$OUT/$name")
+done
