@@ -3,6 +3,8 @@ with several models' renderers alive at once, drawn in turn, closed and replaced
 
 from __future__ import annotations
 
+import subprocess
+import sys
 import threading
 
 import mujoco
@@ -76,3 +78,17 @@ def test_one_context_per_thread_and_a_closed_renderer_refuses_to_draw():
         assert "after close" in str(err)
     else:
         raise AssertionError("a closed renderer drew a frame")
+
+
+def test_an_env_left_open_at_exit_prints_nothing():
+    """A script that never closes its env exits quietly: the renderer's ``__del__`` at interpreter exit does not
+    try to free GL resources through bindings already torn down (it used to print an ignored TypeError)."""
+    script = (  # LeRobot's metaworld module first: with it, the GL bindings are torn down before the renderer
+        "import lerobot.envs.metaworld\n"
+        "from lerobot_factorworld.envs.factor_env import FactorWorldEnv\n"
+        "env = FactorWorldEnv('door-open')\n"
+        "env.reset(seed=0)\n"
+    )
+    proc = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=120)
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    assert "Exception ignored" not in proc.stderr and "Traceback" not in proc.stderr, proc.stderr[-2000:]

@@ -13,6 +13,7 @@ to ``mujoco.Renderer``'s (``tests/test_renderer.py`` checks, interleaving severa
 from __future__ import annotations
 
 import os
+import sys
 import threading
 
 import mujoco
@@ -64,8 +65,10 @@ class SharedContextRenderer(mujoco.Renderer):
         return super().render(out=out)
 
     def close(self) -> None:
-        """Free this model's GL resources; the shared context stays for the next renderer."""
-        if self._mjr_context is not None:
+        """Free this model's GL resources; the shared context stays for the next renderer. At interpreter exit
+        (an env never closed, its renderer collected by ``__del__``) there is nothing to free: the GL library's
+        bindings may already be gone, and the process's contexts go with it."""
+        if self._mjr_context is not None and not sys.is_finalizing():
             self._gl_context.make_current()
             self._mjr_context.free()
         self._mjr_context = None
