@@ -195,6 +195,19 @@ def test_the_pair_metric_per_cell_and_pooled_by_hand():
     assert summary.within_per_cell[0] == 0 and summary.within_pooled[0] == 0
 
 
+def test_pooled_rho_interval_covers_the_pooled_rates_rho():
+    """The pick report's rho of pooled success per condition against a reference gets a seed-bootstrap interval;
+    against the synthetic truth (success falls with hardness) the point and the interval are high (a percentile
+    interval of a rank correlation need not contain its point: resampling breaks the point's ties)."""
+    rows = [r for r in study_rows() if r["widths"] == DEFAULT_WIDTHS and r["condition"] in FACTORS]
+    truth = {f: 1.0 - HARDNESS[f] for f in FACTORS}  # a success-rate-like reference: easier = higher
+    pooled = aggregate.pooled_success(rows, ["condition"])
+    point = metrics.spearman({c: k / n for (c,), (k, n, _, _) in pooled.items()}, truth)
+    low, high = aggregate.pooled_rho_interval(rows, "condition", truth)
+    assert point > 0.9 and 0.5 < low <= high <= 1.0
+    assert all(math.isnan(v) for v in aggregate.pooled_rho_interval(rows, "condition", {"light": 1.0, "x": 0.5}))
+
+
 def test_one_seed_pooled_success_is_the_wilson_interval():
     rows = [r for r in study_rows(seeds=(0,)) if r["widths"] == DEFAULT_WIDTHS and r["condition"] == "train"]
     pooled = aggregate.pooled_success(rows, ["method", "task", "n_train_envs", "condition"])

@@ -16,7 +16,7 @@ from typing import Any
 
 from ..core.io import atomic_write_text, read_table
 from ..protocol.conditions import TRAIN_SUITE
-from ..study.aggregate import main_grid, pooled_success
+from ..study.aggregate import main_grid, pooled_rho_interval, pooled_success
 from ..study.config import StudyConfig
 from ..study.markdown import FAMILY_DETAILS, FAMILY_RESULTS, ci
 from ..study.metrics import spearman
@@ -83,21 +83,25 @@ def real_robot_section(cfg: StudyConfig, rows: Sequence[dict]) -> list[str]:
                 f"| {method.name} | {name} (`{condition}`) | {'—' if paper is None else f'{paper:.1f}%'} | {k}/{n} | "
                 f"{k / n:.2f} {ci(low, high, digits=2, sign=False)} |"
             )
-        lines += _ordering_lines(method.name, rates)
+        lines += _ordering_lines(method.name, rates, [r for r in pick if r["method"] == method.name])
         lines.append("")
     return lines
 
 
-def _ordering_lines(method: str, rates: dict[str, float]) -> list[str]:
-    """Spearman's rho of the shifted conditions' success rates with the paper's real-robot ones."""
+def _ordering_lines(method: str, rates: dict[str, float], rows: Sequence[dict]) -> list[str]:
+    """Spearman's rho of the shifted conditions' success rates with the paper's real-robot ones, with its
+    seed-bootstrap interval (``rows``: the method's pick rows)."""
     shifted = [c for c in rates if c != TRAIN_SUITE and PAPER_REAL_ROBOT.get(c, ("", None))[1] is not None]
-    rho = spearman({c: rates[c] for c in shifted}, {c: PAPER_REAL_ROBOT[c][1] for c in shifted})
+    paper = {c: PAPER_REAL_ROBOT[c][1] for c in shifted}
+    rho = spearman({c: rates[c] for c in shifted}, paper)
     if math.isnan(rho):
         return []
+    low, high = pooled_rho_interval(rows, "condition", paper)
     return [
         "",
         f"{method}: Spearman correlation of the {len(shifted)} shifted conditions' success rates with the "
-        f"paper's real-robot ones: **{rho:+.2f}** (easiest first here: "
+        f"paper's real-robot ones: **{rho:+.2f}**, 95% interval {ci(low, high, digits=2)} (bootstrap) "
+        "(easiest first here: "
         + ", ".join(sorted(shifted, key=lambda c: -rates[c]))
         + "; in the paper: "
         + ", ".join(sorted(shifted, key=lambda c: -PAPER_REAL_ROBOT[c][1]))

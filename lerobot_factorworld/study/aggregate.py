@@ -439,6 +439,40 @@ def pooled_success(rows: Sequence[dict], keys: Sequence[str]) -> dict[tuple, tup
     rows = [r for r in rows if r.get("episodes")]
     if not rows:
         return {}
+    names, _, reps, seeds = _pooled_bootstrap(rows, keys)
+    lo, hi = percentile_interval(reps)
+    totals: dict[tuple, list[int]] = defaultdict(lambda: [0, 0])
+    for r in rows:
+        g = tuple(r.get(k) for k in keys)
+        totals[g][0] += int(r["successes"])
+        totals[g][1] += int(r["episodes"])
+    out = {}
+    for name, low, high in zip(names, lo, hi):
+        k, n = totals[name]
+        w_lo, w_hi = wilson_interval(k, n)
+        if seeds == 1:
+            out[name] = (k, n, w_lo, w_hi)
+        else:
+            out[name] = (k, n, float(np.fmin(low, w_lo)), float(np.fmax(high, w_hi)))
+    return out
+
+
+def pooled_rho_interval(rows: Sequence[dict], key: str, reference: Mapping[str, float]) -> tuple[float, float]:
+    """95% seed-bootstrap interval of Spearman's rho between the success rates pooled per value of ``key``
+    (:func:`pooled_success`; e.g. per condition of one method's rows) and ``reference`` (their shared values;
+    each replicate re-ranks its own pooled rates); NaN with fewer than 3 shared values."""
+    rows = [r for r in rows if r.get("episodes") and r.get(key) in reference]
+    if len({r[key] for r in rows}) < 3:
+        return math.nan, math.nan
+    names, _, reps, _ = _pooled_bootstrap(rows, [key])
+    rhos = np.array([spearman({name[0]: rate for name, rate in zip(names, rep)}, reference) for rep in reps])
+    lo, hi = percentile_interval(rhos)
+    return float(lo), float(hi)
+
+
+def _pooled_bootstrap(rows: Sequence[dict], keys: Sequence[str]) -> tuple[list[tuple], np.ndarray, np.ndarray, int]:
+    """The success rate pooled over seeds and every column but ``keys``, per group: (groups, point (G,),
+    seed-bootstrap replicates (B, G), number of seeds)."""
     if any(g not in CELL_KEYS for g in keys):
         raise ValueError(f"pooled_success groups by columns of {CELL_KEYS}, got {keys}")
     table = cells(rows)
@@ -456,18 +490,4 @@ def pooled_success(rows: Sequence[dict], keys: Sequence[str]) -> dict[tuple, tup
             return np.add.reduceat(k, starts, axis=-1) / total_n
 
     point, reps = table.bootstrap(statistic)
-    lo, hi = percentile_interval(reps)
-    totals: dict[tuple, list[int]] = defaultdict(lambda: [0, 0])
-    for r in rows:
-        g = group_of[tuple(r.get(k) for k in CELL_KEYS)]
-        totals[g][0] += int(r["successes"])
-        totals[g][1] += int(r["episodes"])
-    out = {}
-    for name, low, high in zip(names, lo, hi):
-        k, n = totals[name]
-        w_lo, w_hi = wilson_interval(k, n)
-        if len(table.seeds) == 1:
-            out[name] = (k, n, w_lo, w_hi)
-        else:
-            out[name] = (k, n, float(np.fmin(low, w_lo)), float(np.fmax(high, w_hi)))
-    return out
+    return names, point, reps, len(table.seeds)
