@@ -204,3 +204,18 @@ def test_round_trip_from_lerobots_own_metaworld_data(tmp_path):
     assert "intervals overlap: True" in proc.stdout
     data = json.loads((out / "data" / "meta" / "info.json").read_text())
     assert data["features"]["observation.image"]["shape"] == [480, 480, 3] and data["total_episodes"] == 2
+
+
+def test_the_docs_comparison_script_finds_lerobots_frames_and_states():
+    """``scripts/compare_lerobot_metaworld.py`` (docs/lerobot_metaworld.md's table) at its smallest: button-press
+    at seed 0 renders bit for bit at ``full`` and not at ``fast``, with the same states; an unknown task is refused."""
+    script = Path(__file__).resolve().parents[1] / "scripts" / "compare_lerobot_metaworld.py"
+    run = [sys.executable, str(script), "--seeds", "0", "--quick", "--tasks"]
+    proc = subprocess.run([*run, TASK], capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 0, proc.stdout[-2000:] + proc.stderr[-2000:]
+    assert f"| {TASK} | full | 0.00 (0.00) | 0.00% | 0.00% | identical |" in proc.stdout
+    fast = next(line for line in proc.stdout.splitlines() if line.startswith(f"| {TASK} | fast | "))
+    assert " 0.00% |" not in fast and fast.endswith("| identical |")
+    assert "all: identical states in 1 of 1 episodes" in proc.stdout
+    refused = subprocess.run([*run, "pick"], capture_output=True, text=True, timeout=300)
+    assert refused.returncode == 1 and refused.stderr.startswith("error: no LeRobot counterpart for pick; valid: ")

@@ -51,8 +51,9 @@ COST_MODEL_FILE = Path(__file__).with_name("cost_model.json")
 # of 84 px images, one thread, no gradient, best of 3 rounds; other jobs shared the machine (load average
 # 4.3), so these may be up to 2x high.
 ENCODER_FRAME_S = {"lite0": 0.032, "r3m_rn50": 0.086, "clip_rn50": 0.115}
-# A step of --env.obs=lerobot_metaworld (480 x 480, quality full) on the 2-core machine, as docs/lerobot_metaworld.md
-# measured it (~150 ms, busy cores); not refitted by --fit_cost.
+# A step of --env.obs=lerobot_metaworld (480 x 480, quality full) on the 2-core machine: 137 ms median per rendered
+# step in scripts/compare_lerobot_metaworld.py (2026-11-25, cores shared; docs/lerobot_metaworld.md), rounded up
+# for the policy's share; not refitted by --fit_cost.
 LEROBOT_METAWORLD_STEP_S = 0.15
 FEATURE_CACHE_FRAMES = 100_000  # bc's default feature_cache_size (frames whose frozen features are kept)
 GPU_TRAIN_SPEEDUP = 30.0  # one datacentre GPU vs one CPU core for these small image policies (an assumption)
