@@ -276,7 +276,7 @@ def _resolved_factors(rows: list[dict], method: str, hardest_first: list[str]) -
     both = {**differences, **{(b, a): (-p, -high, -low) for (a, b), (p, low, high) in differences.items()}}
     for factor in hardest_first:
         larger, unresolved = [], []
-        for other in (f for f in hardest_first if f != factor):
+        for other in (f for f in hardest_first if (factor, f) in both):  # factors with a defined gap
             point, low, high = both[(factor, other)]
             if low > 0:
                 larger.append(f"{other} {point:+.3f} {ci(low, high)}")
