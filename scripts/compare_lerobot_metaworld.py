@@ -76,7 +76,8 @@ def record_lerobot(tasks: list[str], seeds: list[int], steps: int, state_seeds: 
             expert = TASK_POLICY_MAPPING[name]()
             env.reset(seed=seed)
             raw = env._env._get_obs()
-            states, actions, success = [raw[:STATE_NUMBERS].copy()], [], -1  # copies: an expert may edit the array it is given (door-open does)
+            # Copies: an expert may edit the array it is given (door-open's does), so keep none of them.
+            states, actions, success = [raw[:STATE_NUMBERS].copy()], [], -1
             for step in range(1, max_steps + 1):
                 actions.append(expert.get_action(raw).astype(np.float32))
                 raw, _, _, _, info = env._env.step(actions[-1])  # Meta-World's own step: no frame rendered
