@@ -35,12 +35,20 @@ for name in ${ONLY:-}; do
 done
 
 done_folders=()
+failed=()
 for name in "${FINDINGS[@]}"; do
   if [[ -z "${ONLY:-}" || " $ONLY " == *" $name "* ]]; then
     reuse=$(IFS=,; echo "${done_folders[*]}")
     echo "== $name${reuse:+ (reusing $reuse)}"
+    # A study that fails (a step's error, a missing weights file) does not stop the others: listed at the end.
     "$BIN/factorworld" study --config "configs/study/findings/$name.yaml" --out_dir="$OUT/$name" \
-      ${reuse:+--reuse_from=[$reuse]} ${DRY_RUN:+--dry-run}
+      ${reuse:+--reuse_from=[$reuse]} ${DRY_RUN:+--dry-run} || failed+=("$name")
   fi
-  [[ -d "$OUT/$name/steps" ]] && done_folders+=("$OUT/$name")
+  if [[ -d "$OUT/$name/steps" ]]; then
+    done_folders+=("$OUT/$name")
+  fi
 done
+if (( ${#failed[@]} )); then
+  echo "error: these findings did not finish: ${failed[*]} (their errors are above; run again to retry them)" >&2
+  exit 1
+fi

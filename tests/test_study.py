@@ -631,6 +631,28 @@ def test_run_findings_runs_every_findings_config_and_refuses_an_unknown_one():
     assert proc.stderr.count("\n") == 1 and not proc.stdout
 
 
+def test_run_findings_reuses_finished_folders_and_goes_on_past_a_failed_study(tmp_path):
+    """With a stand-in ``factorworld`` (BIN): each study names every folder finished before it in ``reuse_from``,
+    a failed study does not stop the next one, and the script ends with exit 1 naming the studies that failed."""
+    bin_dir, out = tmp_path / "bin", tmp_path / "findings"
+    bin_dir.mkdir()
+    stub = bin_dir / "factorworld"
+    stub.write_text(
+        "#!/usr/bin/env bash\n"
+        'echo "args: $*"\n'
+        'for a in "$@"; do case "$a" in --out_dir=*) mkdir -p "${a#--out_dir=}/steps";; esac; done\n'
+        'case "$*" in *f1_ordering.yaml*) exit 1;; esac\n'
+    )
+    stub.chmod(0o755)
+    env = {**os.environ, "BIN": str(bin_dir), "OUT": str(out), "ONLY": "f3_pairs f1_ordering f5_augmentation"}
+    proc = subprocess.run(["bash", str(ROOT / "scripts" / "run_findings.sh")], env=env, capture_output=True, text=True)
+    assert proc.returncode == 1 and proc.stderr.strip().startswith("error: these findings did not finish: f1_ordering ")
+    runs = [line for line in proc.stdout.splitlines() if line.startswith("args: ")]
+    assert len(runs) == 3 and "--reuse_from" not in runs[0]
+    assert f"--reuse_from=[{out}/f3_pairs]" in runs[1]
+    assert f"--reuse_from=[{out}/f3_pairs,{out}/f1_ordering]" in runs[2]  # a failed study's finished steps count
+
+
 def test_study_datasets_store_lossless_frames_by_default():
     """Training frames are PNG (lossless) unless a study asks for video: AV1's 4:2:0 chroma would smear a
     13-pixel object's colour in training while evaluation sees raw renders."""
