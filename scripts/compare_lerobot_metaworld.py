@@ -38,6 +38,7 @@ from lerobot.envs.metaworld import TASK_POLICY_MAPPING  # noqa: E402
 from lerobot.envs.metaworld import MetaworldEnv as LeRobotMetaworldEnv  # noqa: E402
 
 from lerobot_factorworld.envs.factor_env import FactorWorldEnv  # noqa: E402
+from lerobot_factorworld.envs.lerobot_obs import check_lerobot_task  # noqa: E402
 from lerobot_factorworld.tasks import TASKS, get_task  # noqa: E402
 
 DIFF_LEVELS = 16  # "off by more than 16 levels" (of 255), as docs/factors.md counts pixel changes
@@ -45,8 +46,15 @@ STATE_NUMBERS = 36  # Meta-World's observation without its 3-number goal (pick-p
 
 
 def lerobot_tasks() -> list[str]:
-    """Every Factor World task with a LeRobot Meta-World counterpart (a family's task has none)."""
-    return [name for name, spec in TASKS.items() if not spec.family]
+    """Every Factor World task with a LeRobot Meta-World counterpart (``check_lerobot_task``'s rule)."""
+    valid = []
+    for name, spec in TASKS.items():
+        try:
+            check_lerobot_task(spec)
+        except ValueError:  # a family's task: no counterpart
+            continue
+        valid.append(name)
+    return valid
 
 
 def record_lerobot(tasks: list[str], seeds: list[int], steps: int, state_seeds: int, max_steps: int, out: Path):
@@ -105,8 +113,9 @@ def compare_frames(task: str, seeds: list[int], lerobot: dict, quality: str) -> 
             ours.append(env.step(action)[0])
             seconds.append(time.perf_counter() - start)
         for mine, theirs, pos in zip(ours, lerobot[f"frames/{key}"], lerobot[f"agent_pos/{key}"], strict=True):
-            delta = np.abs(mine["pixels"].astype(np.int16) - theirs.astype(np.int16)).max(axis=-1)
-            diffs.append(float(np.abs(mine["pixels"].astype(np.int16) - theirs.astype(np.int16)).mean()))
+            channels = np.abs(mine["pixels"].astype(np.int16) - theirs.astype(np.int16))
+            delta = channels.max(axis=-1)  # a pixel's largest channel difference
+            diffs.append(float(channels.mean()))
             differ.append(float((delta > 0).mean()))
             far.append(float((delta > DIFF_LEVELS).mean()))
             same_pos &= bool(np.array_equal(mine["agent_pos"], pos))

@@ -246,53 +246,71 @@ def _interval(point: np.ndarray, replicates: np.ndarray) -> list[Interval]:
     ]
 
 
-def factor_gap_replicates(
-    rows: Sequence[dict], method: str, factors: Sequence[str]
-) -> tuple[list[str], np.ndarray, np.ndarray]:
-    """The factor ordering's mean gaps (:func:`factor_ordering`) of ``method``: (factors with data, point
-    (F,), bootstrap replicates (B, F))."""
+@dataclass(frozen=True)
+class FactorGapBootstrap:
+    """The factor ordering's mean gaps of one method (:func:`factor_ordering`) and their seed-bootstrap
+    replicates: ``point[f]`` and ``reps[:, f]`` for factor ``names[f]``. One bootstrap, read by every interval
+    of the ordering (per factor, Spearman's rho, pairwise differences), so the report resamples once."""
+
+    names: list[str]
+    point: np.ndarray
+    reps: np.ndarray
+
+    def intervals(self) -> dict[str, Interval]:
+        """Per factor: the mean gap with its 95% interval."""
+        return dict(zip(self.names, _interval(self.point, self.reps))) if self.names else {}
+
+    def differences(self) -> dict[tuple[str, str], Interval]:
+        """Every pair (a, b), a listed before b: gap of a minus gap of b with its 95% interval. Both gaps come
+        from the same replicates, so the interval keeps what they share (the same train cells): the test of
+        whether the ordering resolves a from b."""
+        p, r = self.point, self.reps
+        return {
+            (self.names[i], self.names[j]): _interval(p[i] - p[j], r[:, i] - r[:, j])[0]
+            for i, j in itertools.combinations(range(len(self.names)), 2)
+        }
+
+    def rho_interval(self, reference: Mapping[str, float]) -> tuple[float, float]:
+        """95% interval of Spearman's rho between the ordering and ``reference`` (each replicate re-ranks the
+        factors by its own mean gaps); NaN if rho is mostly undefined."""
+        if not self.names:
+            return math.nan, math.nan
+        ranks = (rank_hardest_first(dict(zip(self.names, rep.tolist()))) for rep in self.reps)
+        lo, hi = percentile_interval(np.array([spearman(rank, reference) for rank in ranks]))
+        return float(lo), float(hi)
+
+
+def factor_gap_bootstrap(rows: Sequence[dict], method: str, factors: Sequence[str]) -> FactorGapBootstrap:
+    """The :class:`FactorGapBootstrap` of ``method`` over ``factors`` (those with data, in their order)."""
     grid = [r for r in main_grid(rows) if r["method"] == method and r["condition"] in (TRAIN_SUITE, *factors)]
     table = cells(grid, gaps=True)
     present = {k[4] for k in table.keys}
     names = [f for f in factors if f in present]
     if not names:
-        return [], np.zeros(0), np.zeros((0, 0))
+        return FactorGapBootstrap([], np.zeros(0), np.zeros((0, 0)))
     groups = [[i for i, k in enumerate(table.keys) if k[4] == f] for f in names]
     train = table.train_columns()
     point, reps = table.bootstrap(lambda r, n: group_mean(cell_gaps(r, train), groups))
-    return names, point, reps
+    return FactorGapBootstrap(names, point, reps)
 
 
 def factor_gap_intervals(rows: Sequence[dict], method: str, factors: Sequence[str]) -> dict[str, Interval]:
     """Per factor: mean gap of ``method`` (over tasks, N, seeds) with its 95% seed-bootstrap interval."""
-    names, point, reps = factor_gap_replicates(rows, method, factors)
-    return dict(zip(names, _interval(point, reps))) if names else {}
+    return factor_gap_bootstrap(rows, method, factors).intervals()
 
 
 def factor_gap_differences(
     rows: Sequence[dict], method: str, factors: Sequence[str]
 ) -> dict[tuple[str, str], Interval]:
-    """Every pair (a, b) of ``factors`` with data, a listed before b: ``method``'s mean gap of a minus that of b
-    (:func:`factor_ordering`), with its 95% seed-bootstrap interval. One bootstrap gives both gaps, so the
-    interval keeps what they share (the same train cells): the test of whether the ordering resolves a from b."""
-    names, point, reps = factor_gap_replicates(rows, method, factors)
-    return {
-        (names[i], names[j]): _interval(point[i] - point[j], reps[:, i] - reps[:, j])[0]
-        for i, j in itertools.combinations(range(len(names)), 2)
-    }
+    """Every pair of ``factors`` with data: :meth:`FactorGapBootstrap.differences`."""
+    return factor_gap_bootstrap(rows, method, factors).differences()
 
 
 def ordering_rho_interval(
     rows: Sequence[dict], method: str, factors: Sequence[str], reference: Mapping[str, float]
 ) -> tuple[float, float]:
-    """95% seed-bootstrap interval of Spearman's rho between ``method``'s factor ordering and ``reference``
-    (each replicate re-ranks the factors by its own mean gaps); NaN if rho is mostly undefined."""
-    names, _, reps = factor_gap_replicates(rows, method, factors)
-    if not names:
-        return math.nan, math.nan
-    rhos = np.array([spearman(rank_hardest_first(dict(zip(names, rep.tolist()))), reference) for rep in reps])
-    lo, hi = percentile_interval(rhos)
-    return float(lo), float(hi)
+    """95% seed-bootstrap interval of Spearman's rho with ``reference``: :meth:`FactorGapBootstrap.rho_interval`."""
+    return factor_gap_bootstrap(rows, method, factors).rho_interval(reference)
 
 
 def method_gap_differences(

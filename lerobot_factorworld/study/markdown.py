@@ -14,14 +14,13 @@ from ..protocol.conditions import TRAIN_SUITE
 from ..tasks import step_limit
 from .aggregate import (
     RADIUS_STEP_M,
-    factor_gap_differences,
-    factor_gap_intervals,
+    FactorGapBootstrap,
+    factor_gap_bootstrap,
     factor_ordering,
     gap_per_factor_and_n,
     gap_per_radius,
     main_grid,
     method_gap_differences,
-    ordering_rho_interval,
     pair_bands,
     pair_rows,
     pair_summary,
@@ -211,7 +210,8 @@ def _ordering_section(cfg: StudyConfig, rows: list[dict]) -> list[str]:
     gaps = factor_ordering(rows, method, cfg.factors)
     ours = rank_hardest_first({f: v[0] for f, v in gaps.items()})
     rho = spearman(ours, PAPER_FACTOR_RANKS)
-    intervals = factor_gap_intervals(rows, method, cfg.factors)
+    bootstrap = factor_gap_bootstrap(rows, method, cfg.factors)  # one resampling for every interval below
+    intervals = bootstrap.intervals()
     lines = [
         f"## Factor ordering ({method}, mean gap over tasks and N)",
         "",
@@ -234,8 +234,8 @@ def _ordering_section(cfg: StudyConfig, rows: list[dict]) -> list[str]:
         )
     else:
         stated = spearman(ours, PAPER_FACTOR_RANKS_STATED)
-        rho_ci = ordering_rho_interval(rows, method, cfg.factors, PAPER_FACTOR_RANKS)
-        stated_ci = ordering_rho_interval(rows, method, cfg.factors, PAPER_FACTOR_RANKS_STATED)
+        rho_ci = bootstrap.rho_interval(PAPER_FACTOR_RANKS)
+        stated_ci = bootstrap.rho_interval(PAPER_FACTOR_RANKS_STATED)
         lines.append(
             f"Spearman correlation with the paper's ordering over {len(shared)} factors: **{rho:+.2f}**, "
             f"95% interval {ci(*rho_ci, digits=2)} (bootstrap) (with only what the paper's text states, the four "
@@ -255,15 +255,15 @@ def _ordering_section(cfg: StudyConfig, rows: list[dict]) -> list[str]:
             lines.append("The ordering agrees with the paper's (no shared factor moves by a whole rank).")
     lines.append(PAPER_ORDERING)
     lines.append("")
-    return lines + _resolved_factors(rows, method, sorted(gaps, key=lambda f: ours.get(f, 99)))
+    return lines + _resolved_factors(bootstrap, method, sorted(gaps, key=lambda f: ours.get(f, 99)))
 
 
-def _resolved_factors(rows: list[dict], method: str, hardest_first: list[str]) -> list[str]:
+def _resolved_factors(bootstrap: FactorGapBootstrap, method: str, hardest_first: list[str]) -> list[str]:
     """Which factors' mean gaps the study tells apart: per factor, the easier factors whose difference to it has
     a 95% bootstrap interval above 0, and those it is not resolved from."""
     if len(hardest_first) < 2:
         return []
-    differences = factor_gap_differences(rows, method, hardest_first)
+    differences = bootstrap.differences()
     lines = [
         f"### Which factors are resolved from each other ({method})",
         "",
