@@ -10,7 +10,13 @@ import pytest
 
 from lerobot_factorworld.study import aggregate, metrics, power
 from lerobot_factorworld.study.config import EvalSettings, StudyConfig
-from lerobot_factorworld.study.markdown import _ordering_section, _pairs_section, _per_task_table, _radius_section
+from lerobot_factorworld.study.markdown import (
+    _gap_against_n_section,
+    _ordering_section,
+    _pairs_section,
+    _per_task_table,
+    _radius_section,
+)
 from lerobot_factorworld.study.paper import PAPER_FACTOR_RANKS
 from lerobot_factorworld.study.plan import DEFAULT_WIDTHS
 
@@ -213,6 +219,43 @@ def test_one_seed_pooled_success_is_the_wilson_interval():
     pooled = aggregate.pooled_success(rows, ["method", "task", "n_train_envs", "condition"])
     for k, n, low, high in pooled.values():
         assert (low, high) == pytest.approx(metrics.wilson_interval(k, n))
+
+
+def test_gap_against_n_matches_the_gap_table_and_resolves_a_gap_that_closes():
+    """F2's numbers: each factor's gap per N is the gap table's, 'all factors' their mean, the change the last N's
+    gap minus the first's; where every gap closes at the larger N (synthetic), the change's interval is below 0."""
+    rows = [r for r in study_rows(ns=(5,), episodes=60) if r["widths"] == DEFAULT_WIDTHS]
+    wide = [dict(r, n_train_envs=50) for r in study_rows(ns=(5,), episodes=60, seed=1) if r["widths"] == DEFAULT_WIDTHS]
+    train = {(r["task"], r["seed"]): r for r in wide if r["condition"] == "train"}
+    for r in wide:  # at N = 50 every shifted condition keeps the train condition's successes: no gap
+        t = train[(r["task"], r["seed"])]
+        r.update(successes=t["successes"], success_rate=t["success_rate"], gap=0.0)
+    rows += wide
+    found = aggregate.gap_against_n(rows, "bc", FACTORS)
+    table = aggregate.gap_per_factor_and_n(rows)
+    assert found.ns == [5, 50] and list(found.gaps) == [*FACTORS, aggregate.ALL_FACTORS]
+    for factor in FACTORS:
+        for n, (point, low, high) in zip(found.ns, found.gaps[factor]):
+            assert point == pytest.approx(table[("bc", factor, n)][0]) and low <= point <= high
+        change = found.change[factor]
+        assert change[0] == pytest.approx(found.gaps[factor][1][0] - found.gaps[factor][0][0])
+        assert change[1] <= change[0] <= change[2]
+    everything = found.gaps[aggregate.ALL_FACTORS]
+    assert everything[0][0] == pytest.approx(np.mean([found.gaps[f][0][0] for f in FACTORS]))
+    assert found.change[FACTORS[0]][2] < 0 and found.change[aggregate.ALL_FACTORS][2] < 0  # the hardest closes
+    assert found.gaps[FACTORS[0]][1][0] == 0.0  # no gap at N = 50
+    assert aggregate.gap_against_n([r for r in rows if r["n_train_envs"] == 5], "bc", FACTORS) is None  # one N
+    assert aggregate.gap_against_n(rows, "other", FACTORS) is None
+
+    bc = [{"name": "bc", "policy": {"type": "bc"}}]
+    wide_config = config(methods=bc, n_train_envs=[5, 50], eval=EvalSettings(n_test_envs=50, episodes=50))
+    section = "\n".join(_gap_against_n_section(wide_config, rows))
+    assert "## Gap against N" in section and "| factor | N=5 | N=50 | change N=5 -> 50 |" in section
+    line = next(x for x in section.splitlines() if x.startswith(f"| {FACTORS[0]} | "))
+    assert line.count("[") == 3 and line.endswith("] |")
+    assert (
+        _gap_against_n_section(config(methods=bc, n_train_envs=[5]), [r for r in rows if r["n_train_envs"] == 5]) == []
+    )
 
 
 def test_the_report_prints_intervals_for_rho_pairs_slopes_and_pooled_tables():

@@ -412,6 +412,52 @@ def pair_summary(rows: Sequence[dict], method: str, tolerance: float) -> PairSum
     )
 
 
+ALL_FACTORS = "all factors"  # the label of the mean over every factor given
+
+
+@dataclass(frozen=True)
+class GapAgainstN:
+    """One method's gaps against the number of training environments: ``gaps[label]`` holds the mean gap
+    (over the label's factors, tasks and seeds) at each of ``ns`` and ``change[label]`` the gap at the largest
+    N minus the gap at the smallest (negative: more training environments shrink it), each an
+    :data:`Interval` from one seed bootstrap."""
+
+    ns: list
+    gaps: dict[str, list[Interval]]
+    change: dict[str, Interval]
+
+
+def gap_against_n(rows: Sequence[dict], method: str, factors: Sequence[str]) -> GapAgainstN | None:
+    """:class:`GapAgainstN` of ``method`` over each of ``factors`` with data and over all of them
+    (:data:`ALL_FACTORS`), main grid; ``None`` unless the method has gaps at two or more N (section 5.1's
+    claim that every gap closes as N grows, Fig. 3a)."""
+    grid = [r for r in main_grid(rows) if r["method"] == method and r["condition"] in (TRAIN_SUITE, *factors)]
+    table = cells(grid, gaps=True)
+    ns = sorted({k[2] for k in table.keys if k[4] != TRAIN_SUITE})
+    present = [f for f in factors if any(k[4] == f for k in table.keys)]
+    if len(ns) < 2 or not present:
+        return None
+    labels = {f: (f,) for f in present}
+    labels[ALL_FACTORS] = tuple(present)
+    groups = [
+        [i for i, k in enumerate(table.keys) if k[4] in names and k[2] == n] for names in labels.values() for n in ns
+    ]
+    train = table.train_columns()
+    shape = (len(labels), len(ns))
+
+    def statistic(r: np.ndarray, n: np.ndarray) -> np.ndarray:
+        means = group_mean(cell_gaps(r, train), groups).reshape(*r.shape[:-2], *shape)
+        return np.concatenate([means, means[..., -1:] - means[..., :1]], axis=-1)  # (..., L, N + 1)
+
+    point, reps = table.bootstrap(statistic)
+    per_label = [_interval(point[i], reps[:, i]) for i in range(len(labels))]
+    return GapAgainstN(
+        ns=ns,
+        gaps={label: found[:-1] for label, found in zip(labels, per_label)},
+        change={label: found[-1] for label, found in zip(labels, per_label)},
+    )
+
+
 RADIUS_STEP_M = 0.025  # the appendix's radii are multiples of it: slopes are reported per step
 
 

@@ -17,6 +17,7 @@ from .aggregate import (
     FactorGapBootstrap,
     factor_gap_bootstrap,
     factor_ordering,
+    gap_against_n,
     gap_per_factor_and_n,
     gap_per_radius,
     main_grid,
@@ -135,6 +136,7 @@ def render(
     lines += _ordering_section(cfg, rows)
     lines += family_sections(FAMILY_RESULTS)
     lines += _gap_table(cfg, rows)
+    lines += _gap_against_n_section(cfg, rows)
     lines += _methods_section(cfg, rows)
     lines += _pairs_section(cfg, rows)
     lines += _radius_section(cfg, rows)
@@ -302,6 +304,34 @@ def _gap_table(cfg: StudyConfig, rows: list[dict]) -> list[str]:
                     f"| {method.name} | {condition} | " + " | ".join(pm(*c[:2]) if c else "n/a" for c in cells) + " |"
                 )
     lines.append("")
+    return lines
+
+
+def _gap_against_n_section(cfg: StudyConfig, rows: list[dict]) -> list[str]:
+    """Each factor's gap at every N with its interval, and its change from the smallest N to the largest."""
+    found = {m.name: gap_against_n(rows, m.name, cfg.shifted_factors()) for m in cfg.methods}
+    found = {method: g for method, g in found.items() if g is not None}
+    if not found:
+        return []
+    lines = ["## Gap against N (mean gap over tasks and seeds, 95% bootstrap intervals)", ""]
+    for method, g in found.items():
+        first, last = g.ns[0], g.ns[-1]
+        lines += [
+            f"{method}: each factor's gap at each N and its change from N={first} to N={last} (the gap at N={last} "
+            f"minus the gap at N={first}: negative where more training environments shrink it; section 5.1 says every "
+            "gap closes). A larger N may also lower P_T (the success rates below), which caps the gaps.",
+            "",
+            "| factor | " + " | ".join(f"N={n}" for n in g.ns) + f" | change N={first} -> {last} |",
+            "|---|" + "---|" * (len(g.ns) + 1),
+        ]
+        for label, gaps in g.gaps.items():
+            change = g.change[label]
+            lines.append(
+                f"| {label} | "
+                + " | ".join(f"{pm(p, math.nan)} {ci(lo, hi)}" for p, lo, hi in gaps)
+                + f" | {pm(change[0], math.nan)} {ci(*change[1:])} |"
+            )
+        lines.append("")
     return lines
 
 
