@@ -422,7 +422,7 @@ class GapAgainstN:
     N minus the gap at the smallest (negative: more training environments shrink it), each an
     :data:`Interval` from one seed bootstrap."""
 
-    ns: list
+    ns: list[int]
     gaps: dict[str, list[Interval]]
     change: dict[str, Interval]
 

@@ -13,6 +13,7 @@ from ..core.provenance import UNKNOWN
 from ..protocol.conditions import TRAIN_SUITE
 from ..tasks import step_limit
 from .aggregate import (
+    ALL_FACTORS,
     RADIUS_STEP_M,
     FactorGapBootstrap,
     factor_gap_bootstrap,
@@ -339,7 +340,7 @@ def _methods_section(cfg: StudyConfig, rows: list[dict]) -> list[str]:
     methods = [m.name for m in cfg.methods]
     labels = {f: (f,) for f in cfg.shifted_factors()}
     labels.update({name: group for name, group in PAPER_FACTOR_GROUPS.items() if set(group) <= set(labels)})
-    labels["all factors"] = tuple(cfg.shifted_factors())
+    labels[ALL_FACTORS] = tuple(cfg.shifted_factors())
     found = method_gap_differences(rows, methods, labels)
     if not found:
         return []
