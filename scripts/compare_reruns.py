@@ -22,18 +22,15 @@ import _bench
 
 _bench.add_repo_to_path()
 
-from lerobot_factorworld.study.episodes import EPISODES_FILE  # noqa: E402
+from lerobot_factorworld.study.episodes import EPISODES_FILE, read_episodes  # noqa: E402
 from lerobot_factorworld.study.rerun import compare_reruns  # noqa: E402
 from lerobot_factorworld.study.results import RESULTS_FILE, read_results  # noqa: E402
 
 
 def episode_rows(folder: Path) -> list[dict]:
+    """The folder's episodes (``episodes.parquet``), or none when it has no such file."""
     path = folder / EPISODES_FILE
-    if not path.is_file():
-        return []
-    import pyarrow.parquet as pq  # only when the folder has episodes
-
-    return pq.read_table(path, columns=["step", "episode_ix", "success", "n_steps"]).to_pylist()
+    return read_episodes(path) if path.is_file() else []
 
 
 def main() -> None:
