@@ -5,6 +5,7 @@ results.csv regenerates, and every table fenced in docs/*.md equals its regenera
 The machinery is tested on small committed studies under ``tests/data/results/`` (``quick``: the quick
 study's door-open run; ``pick_toy``: a two-seed pick study with its ``pick_breakdowns.csv``)."""
 
+import re
 import shutil
 import subprocess
 import sys
@@ -55,6 +56,8 @@ PUBLISHED = {
     "bp60_cap200": ROOT / "docs" / "findings.md",
     "bp60_cap500": ROOT / "docs" / "findings.md",
     "bp45_cap500": ROOT / "docs" / "findings.md",
+    "f2_gap_vs_n_pick-place": ROOT / "docs" / "findings.md",
+    "f6_pretrained": ROOT / "docs" / "findings.md",
 }  # committed studies and a page that must quote them
 
 
@@ -80,6 +83,26 @@ def test_every_committed_report_and_fenced_docs_table_is_what_its_results_csv_re
             assert (folder / plot.name).is_file(), f"{folder / plot.name} missing: run scripts/sync_docs_results.py"
     problems = check_docs(doc_files(ROOT / "docs"), reports)
     assert not problems, "stale docs tables (run `python scripts/sync_docs_results.py`): " + "; ".join(problems)
+
+
+def test_every_findings_row_names_its_configs_and_committed_results():
+    """docs/findings.md's summary table has one row per finding F1-F9; each names configs that exist under
+    configs/study/findings/ and at least one committed ``docs/results/<study>/results.csv``."""
+    rows = {}
+    for line in (ROOT / "docs" / "findings.md").read_text().splitlines():
+        cells = [c.strip() for c in line.split("|")]
+        if len(cells) > 3 and cells[1][:1] == "F" and cells[1][1:].isdigit():
+            rows[cells[1]] = cells[3]
+    assert sorted(rows) == [f"F{i}" for i in range(1, 10)], sorted(rows)
+    for finding, cell in rows.items():
+        names = re.findall(r"`([^`]+)`", cell)
+        configs = [n for n in names if n.endswith(".yaml")]
+        results = [n for n in names if n.startswith(f"{RESULTS_ROOT}/")]
+        assert configs and results, f"{finding}: names no config or no committed results: {cell}"
+        for config in configs:
+            assert (ROOT / "configs" / "study" / "findings" / config).is_file(), f"{finding}: no {config}"
+        for folder in results:
+            assert (ROOT / folder / "results.csv").is_file(), f"{finding}: no {folder}results.csv"
 
 
 # --- factorworld report on committed fixture data ---------------------------------------------------
