@@ -26,6 +26,27 @@ from filelock import FileLock  # noqa: E402
 
 from lerobot_factorworld.envs.factor_env import FactorWorldEnv  # noqa: E402
 
+THREAD_VARIABLES = ("OMP_NUM_THREADS", "MKL_NUM_THREADS", "LP_NUM_THREADS")  # torch/oneDNN, MKL, Mesa's llvmpipe
+
+
+def pytest_configure(config):
+    """Under ``pytest -n N`` give each worker, and every process it starts (``lerobot-train``, ``lerobot-eval``,
+    the scripts: they inherit the environment), its share of the CPUs for torch's and llvmpipe's thread pools.
+
+    Left at their default (one thread per CPU), 2 workers on 2 cores run 4 or more busy threads: an OpenMP
+    region then waits, spinning, for a thread the other worker has descheduled, and a 40-step RT-1
+    ``lerobot-train`` took 100 s and 240 CPU-s instead of 21 s. xdist tells a worker its count only here
+    (``workerinput``), after this file is imported and before the test modules import torch. A value already in
+    the environment is kept."""
+    workerinput = getattr(config, "workerinput", None)
+    if workerinput is None:
+        return
+    threads = str(max(1, (os.cpu_count() or 1) // max(1, int(workerinput["workercount"]))))
+    for variable in THREAD_VARIABLES:
+        os.environ.setdefault(variable, threads)
+    if "torch" in sys.modules:  # imported already (by a plugin): its pool is sized at first use, so resize it
+        sys.modules["torch"].set_num_threads(int(os.environ["OMP_NUM_THREADS"]))
+
 
 @pytest.fixture
 def make_env():
@@ -200,47 +221,46 @@ def factorworld_checkpoint(build_once) -> Path:
 
 # --- scheduling --------------------------------------------------------------------------------------
 
-# Seconds a test (or an xdist group, summed) took in a full run (`pytest -n 2 --durations=45`, 2026-11-24, load
-# average 5-7 on the 2 cores: every number about twice an idle run's); a test not listed counts as SLOW_DEFAULT
-# when marked slow, else 0 (kept in file order after the listed ones). Only the order depends on these numbers:
-# update them when a test becomes one of the longest.
+# Seconds a test (or an xdist group, summed) took in a full run (`pytest -n auto --durations=40`, 2026-11-26, on
+# the 2 cores beside a niced study; each worker and its processes capped to one thread by pytest_configure); a
+# test not listed counts as SLOW_DEFAULT when marked slow, else 0 (kept in file order after the listed ones). Only
+# the order depends on these numbers: update them when a test becomes one of the longest.
 EXPECTED_SECONDS = {
-    "toy_study": 190.0,  # the xdist group of tests/test_study.py's toy study (local, rerun, reuse, a part on Ray)
-    "tests/test_rt1.py::test_lerobot_train_lowers_the_loss_and_lerobot_eval_runs_the_checkpoint": 210.0,
-    "tests/test_pick.py::test_rt1_trains_across_instructions_and_lerobot_eval_reports_every_condition": 150.0,
-    "tests/test_throughput.py::test_bench_study_quick_runs_both_executions_with_identical_results": 110.0,
-    "tests/test_bench_scripts.py::test_bench_script_quick_prints_ratio_last[collect]": 100.0,
-    "tests/test_pick.py::test_bc_trains_on_instructions_and_lerobot_eval_reports_held_out_phrasings": 97.0,
-    # with its bc_checkpoint fixture (collecting tiny_dataset, lerobot-train) when it is the first to ask for them;
-    # the two profile tests were timed in another run (55 and 30 s), doubled here to this table's load
-    "tests/test_profile.py::test_profile_writes_a_studys_outputs_without_collecting_or_training": 110.0,
-    "tests/test_profile.py::test_profile_of_a_lerobot_metaworld_checkpoint": 60.0,
-    "tests/test_bench_scripts.py::test_bench_script_quick_prints_ratio_last[bc]": 90.0,
-    "tests/test_bc.py::test_lerobot_train_conv_with_shift_and_color": 80.0,
-    "tests/test_bc.py::test_lerobot_train_frozen_encoder_then_lerobot_eval_without_its_weights_file[r3m_rn50]": 72.0,
-    "tests/test_docs_results.py::test_the_sync_script_rewrites_fenced_tables_and_check_finds_stale_ones": 66.0,
-    "tests/test_bc.py::test_lerobot_train_frozen_encoder_then_lerobot_eval_without_its_weights_file[clip_rn50]": 62.0,
-    "tests/test_datasets.py::test_killed_collection_resumes_without_duplicates": 51.0,
-    "tests/test_experts.py::test_expert_solves_default_and_each_physical_shift": 49.0,
-    "tests/test_bc.py::test_lerobot_train_frozen_encoder_then_lerobot_eval_without_its_weights_file[lite0]": 48.0,
-    "tests/test_pick.py::test_held_out_objects_and_phrasings_never_appear_in_training_environments": 45.0,
-    "tests/test_bc.py::test_checkpoint_reloads_after_its_weights_file_is_deleted": 41.0,
-    # timed alone under a load average of 3 (the study and a learning curve beside it): 220 s, about 2 min idle
-    "tests/test_lerobot_metaworld_obs.py::test_round_trip_from_lerobots_own_metaworld_data": 200.0,
-    "tests/test_lerobot_metaworld_obs.py::test_a_checkpoint_made_for_lerobots_metaworld_env_runs_in_lerobot_eval_unchanged": 41.0,
-    "tests/test_lerobot.py::test_lerobot_eval_runs_a_lerobot_policy_on_factorworld": 37.0,
-    "tests/test_datasets.py::test_lerobot_train_runs_on_the_collected_dataset": 36.0,
-    "tests/test_compat.py::test_dataset_sidecars_are_byte_identical": 35.0,
-    "tests/test_pick.py::test_expert_succeeds_in_default_scenes_and_under_physical_shifts": 34.0,
-    "tests/test_study.py::test_cli_dry_run_and_one_line_errors": 34.0,
-    "tests/test_bench_scripts.py::test_bench_script_quick_prints_ratio_last[policy]": 33.0,
-    "tests/test_lerobot.py::test_lerobot_eval_fails_on_a_bad_env_setting_before_building_a_policy": 32.0,
-    "tests/test_datasets.py::test_offline_push_fails_clearly_and_loses_nothing": 27.0,
-    "tests/test_docs_results.py::test_a_fence_of_a_study_without_committed_results_is_refused": 23.0,
-    "tests/test_datasets.py::test_full_disk_keeps_finished_shards_and_a_rerun_completes": 16.0,
-    "tests/test_bench_scripts.py::test_bench_script_quick_prints_ratio_last[env]": 15.0,
-    "tests/test_study.py::test_episodes_visit_every_environment_equally_and_pair_object_starts": 8.0,
-    "tests/test_datasets.py::test_several_tasks_in_one_video_dataset_and_append": 8.0,
+    "toy_study": 120.0,  # the xdist group of tests/test_study.py's toy study (local, rerun, reuse, a part on Ray)
+    "tests/test_lerobot_metaworld_obs.py::test_round_trip_from_lerobots_own_metaworld_data": 107.0,
+    "tests/test_throughput.py::test_bench_study_quick_runs_both_executions_with_identical_results": 63.0,
+    "tests/test_bench_scripts.py::test_bench_script_quick_prints_ratio_last[collect]": 52.0,
+    "tests/test_docs_results.py::test_the_sync_script_rewrites_fenced_tables_and_check_finds_stale_ones": 49.0,
+    "tests/test_bench_scripts.py::test_bench_script_quick_prints_ratio_last[bc]": 40.0,
+    "tests/test_pick.py::test_rt1_trains_across_instructions_and_lerobot_eval_reports_every_condition": 40.0,
+    "tests/test_rt1.py::test_lerobot_train_lowers_the_loss_and_lerobot_eval_runs_the_checkpoint": 37.0,
+    "tests/test_pick.py::test_bc_trains_on_instructions_and_lerobot_eval_reports_held_out_phrasings": 35.0,
+    "tests/test_bc.py::test_lerobot_train_frozen_encoder_then_lerobot_eval_without_its_weights_file[r3m_rn50]": 28.0,
+    "tests/test_rerun.py::test_the_cpu_fingerprint_hashes_each_layer_and_a_oneDNN_cap_leaves_pixels_and_physics_alone": 25.0,
+    "tests/test_lerobot_metaworld_obs.py::test_the_docs_comparison_script_finds_lerobots_frames_and_states": 25.0,
+    "tests/test_datasets.py::test_killed_collection_resumes_without_duplicates": 22.0,
+    "tests/test_pick.py::test_expert_succeeds_in_default_scenes_and_under_physical_shifts": 22.0,
+    "tests/test_profile.py::test_profile_writes_a_studys_outputs_without_collecting_or_training": 22.0,
+    "tests/test_bc.py::test_lerobot_train_frozen_encoder_then_lerobot_eval_without_its_weights_file[clip_rn50]": 20.0,
+    "tests/test_experts.py::test_expert_solves_default_and_each_physical_shift[pick-place]": 20.0,
+    "tests/test_study.py::test_cli_dry_run_and_one_line_errors": 18.0,
+    "tests/test_pick.py::test_held_out_objects_and_phrasings_never_appear_in_training_environments": 17.0,
+    "tests/test_docs_results.py::test_every_committed_report_and_fenced_docs_table_is_what_its_results_csv_regenerates": 16.0,
+    "tests/test_bc.py::test_lerobot_train_conv_with_shift_and_color": 13.0,
+    "tests/test_compat.py::test_dataset_sidecars_are_byte_identical[sidecar_door-open.json]": 13.0,
+    "tests/test_profile.py::test_profile_of_a_lerobot_metaworld_checkpoint": 13.0,
+    "tests/test_lerobot.py::test_lerobot_eval_runs_a_lerobot_policy_on_factorworld": 13.0,
+    "tests/test_lerobot_metaworld_obs.py::test_a_checkpoint_made_for_lerobots_metaworld_env_runs_in_lerobot_eval_unchanged": 12.0,
+    "tests/test_compat.py::test_dataset_sidecars_are_byte_identical[sidecar_pick.json]": 12.0,
+    "tests/test_experts.py::test_expert_solves_default_and_each_physical_shift[bin-picking]": 12.0,
+    "tests/test_bc.py::test_lerobot_train_frozen_encoder_then_lerobot_eval_without_its_weights_file[lite0]": 12.0,
+    "tests/test_experts.py::test_expert_solves_default_and_each_physical_shift[basketball]": 11.0,
+    "tests/test_datasets.py::test_lerobot_train_runs_on_the_collected_dataset": 11.0,
+    "tests/test_experts.py::test_expert_solves_default_and_each_physical_shift[pick]": 10.0,
+    "tests/test_docs_results.py::test_a_fence_of_a_study_without_committed_results_is_refused": 10.0,
+    "tests/test_experts.py::test_expert_solves_default_and_each_physical_shift[door-open]": 10.0,
+    "tests/test_docs_results.py::test_report_command_regenerates_report_and_plots_from_a_results_csv_alone": 10.0,
+    "tests/test_lerobot.py::test_lerobot_eval_fails_on_a_bad_env_setting_before_building_a_policy": 9.0,
 }
 SLOW_DEFAULT = 10.0
 
