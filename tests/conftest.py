@@ -10,12 +10,16 @@ Under ``pytest -n auto`` (``make test``; pyproject.toml adds ``--dist loadgroup 
 * the longest tests are started first (:data:`EXPECTED_SECONDS`), so both workers finish together.
 """
 
+import contextlib
 import functools
+import io
+import logging
 import os
 import pickle
 import shutil
 import subprocess
 import sys
+import traceback
 from collections.abc import Callable
 from pathlib import Path
 
@@ -25,6 +29,7 @@ import pytest  # noqa: E402
 from filelock import FileLock  # noqa: E402
 
 from lerobot_factorworld.envs.factor_env import FactorWorldEnv  # noqa: E402
+from lerobot_factorworld.study.steps import as_lerobot_process  # noqa: E402
 
 THREAD_VARIABLES = ("OMP_NUM_THREADS", "MKL_NUM_THREADS", "LP_NUM_THREADS")  # torch/oneDNN, MKL, Mesa's llvmpipe
 
@@ -63,23 +68,60 @@ def make_env():
         env.close()
 
 
-def _run_tool(tool: str, *args: str, timeout: int = 900) -> subprocess.CompletedProcess:
-    """Run one of the venv's console scripts (``lerobot-train``, ``lerobot-eval``, ...) headless; assert it succeeded."""
-    proc = subprocess.run(
-        [str(Path(sys.executable).parent / tool), *args],
-        capture_output=True,
-        text=True,
-        timeout=timeout,
-        env={**os.environ, "MUJOCO_GL": "egl"},
-    )
+def _run_main(argv: list[str], main: Callable[[], object], *contexts) -> subprocess.CompletedProcess:
+    """``main()`` of a command line program run in this process with ``sys.argv = argv`` (inside ``contexts``),
+    reported as a process would be: the exit status (``SystemExit``'s code; 1 and the traceback on stderr for
+    an exception), stdout and stderr; logging's root handlers are restored afterwards (LeRobot's
+    ``init_logging`` replaces them)."""
+    root = logging.getLogger()
+    saved = list(sys.argv), list(root.handlers), root.level
+    stdout, stderr, code = io.StringIO(), io.StringIO(), 0
+    sys.argv = list(argv)
+    try:
+        with contextlib.ExitStack() as stack:
+            stack.enter_context(contextlib.redirect_stdout(stdout))
+            stack.enter_context(contextlib.redirect_stderr(stderr))
+            for context in contexts:
+                stack.enter_context(context)
+            main()
+    except SystemExit as exit_:
+        code = exit_.code if isinstance(exit_.code, int) else 1
+    except Exception:  # noqa: BLE001 - reported as a failed process would report it
+        code = 1
+        stderr.write(traceback.format_exc())
+    finally:
+        sys.argv, root.handlers[:] = saved[0], saved[1]
+        root.setLevel(saved[2])
+    return subprocess.CompletedProcess(argv, code, stdout.getvalue(), stderr.getvalue())
+
+
+@pytest.fixture
+def run_main():
+    """Run a command line program's ``main()`` in this process (:func:`_run_main`)."""
+    return _run_main
+
+
+def _run_lerobot(command: str, *args: str) -> subprocess.CompletedProcess:
+    """``lerobot-train`` or ``lerobot-eval`` with ``args``: their console script's ``main()`` run in this worker
+    process as a study's grouped execution trains (``study/steps.py: as_lerobot_process``); asserts it
+    succeeded. The same code as the console script without the ~7 s of imports a new process pays; the console
+    scripts themselves run as processes in tests/test_datasets.py (``lerobot-train``), tests/test_lerobot.py
+    (``lerobot-eval``) and the LeRobot round trip (both)."""
+    # LeRobot's training and evaluation stacks (seconds): imported by the slow tests only.
+    import torch  # noqa: PLC0415
+    from lerobot.scripts import lerobot_eval, lerobot_train  # noqa: PLC0415
+
+    main = {"lerobot-train": lerobot_train.main, "lerobot-eval": lerobot_eval.main}[command]
+    process = as_lerobot_process(command, list(args), Path.cwd(), torch.get_num_threads())
+    proc = _run_main([command, *args], main, process)
     assert proc.returncode == 0, proc.stderr[-3000:]
     return proc
 
 
 @pytest.fixture
-def run_tool():
-    """Run a venv console script (``lerobot-train``, ``lerobot-eval``) headless and assert it succeeded."""
-    return _run_tool
+def run_lerobot():
+    """Run ``lerobot-train`` or ``lerobot-eval`` in this process (:func:`_run_lerobot`); assert it succeeded."""
+    return _run_lerobot
 
 
 # --- expensive inputs, built once per run and shared by every xdist worker ---------------------------
@@ -143,7 +185,7 @@ def tiny_dataset(build_once) -> Path:
 def _train_bc(dataset: Path, folder: Path) -> Path:
     """``lerobot-train`` of bc for 2 steps on ``dataset`` (``tiny_dataset``): its ``pretrained_model`` folder."""
     out = folder / "train"
-    _run_tool(
+    _run_lerobot(
         "lerobot-train",
         "--policy.type=bc",
         "--policy.device=cpu",

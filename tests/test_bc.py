@@ -3,8 +3,6 @@ files made here in the published formats, feature cache, save/load, and real ``l
 ``lerobot-eval`` runs on an exported Factor World dataset."""
 
 import re
-import subprocess
-import sys
 from pathlib import Path
 
 import pytest
@@ -304,16 +302,8 @@ def test_instruction_embedding_can_condition_the_head():
 # --- real lerobot-train / lerobot-eval -------------------------------------------------------------
 
 
-def lerobot(command: str, *args: str, timeout: int = 600) -> subprocess.CompletedProcess:
-    proc = subprocess.run(
-        [str(Path(sys.executable).parent / command), *args], capture_output=True, text=True, timeout=timeout
-    )
-    assert proc.returncode == 0, proc.stderr[-4000:]
-    return proc
-
-
-def train(dataset: Path, out: Path, steps: int, *policy_args: str) -> list[float]:
-    proc = lerobot(
+def train(run_lerobot, dataset: Path, out: Path, steps: int, *policy_args: str) -> list[float]:
+    proc = run_lerobot(
         "lerobot-train",
         "--policy.type=bc",
         "--policy.device=cpu",
@@ -334,32 +324,32 @@ def train(dataset: Path, out: Path, steps: int, *policy_args: str) -> list[float
 
 
 @pytest.mark.slow
-def test_lerobot_train_conv_with_shift_and_color(tiny_dataset, tmp_path):
+def test_lerobot_train_conv_with_shift_and_color(tiny_dataset, tmp_path, run_lerobot):
     """One ``lerobot-train`` run covers every augmentation's code: ``shift+color`` switches shift and colour on
     independently (each mode is tested in process above), and ``none`` is what every other bc training in this
     suite runs (the study's, pick's, the frozen encoders')."""
     augment = ImageAugmentation("shift+color")
     assert augment.shift and augment.color
-    losses = train(tiny_dataset, tmp_path / "train", 40, "--policy.augmentation=shift+color")
+    losses = train(run_lerobot, tiny_dataset, tmp_path / "train", 40, "--policy.augmentation=shift+color")
     assert len(losses) == 4 and losses[-1] < losses[0], losses
 
 
 @pytest.mark.slow
 @pytest.mark.parametrize("encoder", ["lite0", "clip_rn50", "r3m_rn50"])
 def test_lerobot_train_frozen_encoder_then_lerobot_eval_without_its_weights_file(
-    tiny_dataset, weights, tmp_path, encoder
+    tiny_dataset, weights, tmp_path, encoder, run_lerobot
 ):
     args = [f"--policy.encoder={encoder}"]
     if encoder in weights:
         copy = tmp_path / weights[encoder][0].name
         copy.write_bytes(weights[encoder][0].read_bytes())
         args.append(f"--policy.encoder_weights_path={copy}")
-    losses = train(tiny_dataset, tmp_path / "train", 4, *args)
+    losses = train(run_lerobot, tiny_dataset, tmp_path / "train", 4, *args)
     assert losses and all(loss == loss for loss in losses)
     if encoder != "r3m_rn50":
         return  # one lerobot-eval run is enough: every encoder reloads through the same from_pretrained
     copy.unlink()
-    lerobot(
+    run_lerobot(
         "lerobot-eval",
         f"--policy.path={tmp_path / 'train' / 'checkpoints' / 'last' / 'pretrained_model'}",
         "--env.type=factorworld",

@@ -5,6 +5,7 @@ results.csv regenerates, and every table fenced in docs/*.md equals its regenera
 The machinery is tested on small committed studies under ``tests/data/results/`` (``quick``: the quick
 study's door-open run; ``pick_toy``: a two-seed pick study with its ``pick_breakdowns.csv``)."""
 
+import importlib.util
 import re
 import shutil
 import subprocess
@@ -257,20 +258,23 @@ def _docs_tree(tmp_path: Path) -> Path:
     return docs
 
 
-def _sync(tmp_path: Path, *flags: str) -> subprocess.CompletedProcess:
-    return subprocess.run(
-        [sys.executable, str(SYNC), f"--root={tmp_path}", *flags], capture_output=True, text=True, timeout=300
-    )
+def _sync(run_main, tmp_path: Path, *flags: str) -> subprocess.CompletedProcess:
+    """The sync script run on ``tmp_path``: its ``main()`` in this process (a process would spend ~8 s importing
+    what this module has imported already)."""
+    spec = importlib.util.spec_from_file_location("sync_docs_results", SYNC)
+    script = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(script)
+    return run_main([str(SYNC), f"--root={tmp_path}", *flags], script.main)
 
 
-def test_the_sync_script_rewrites_fenced_tables_and_check_finds_stale_ones(tmp_path):
+def test_the_sync_script_rewrites_fenced_tables_and_check_finds_stale_ones(tmp_path, run_main):
     page = _docs_tree(tmp_path)
     before = page.read_text()
-    stale = _sync(tmp_path, "--check")
+    stale = _sync(run_main, tmp_path, "--check")
     assert stale.returncode == 1 and "page.md:5" in stale.stdout and "page.md:14" in stale.stdout
     assert "quick/report.md is not what its results.csv regenerates" in stale.stdout  # not regenerated yet
     assert page.read_text() == before  # --check changes nothing
-    synced = _sync(tmp_path)
+    synced = _sync(run_main, tmp_path)
     assert synced.returncode == 0, synced.stderr
     assert "rewrote 1 docs file(s)" in synced.stdout
     text = page.read_text()
@@ -283,15 +287,15 @@ def test_the_sync_script_rewrites_fenced_tables_and_check_finds_stale_ones(tmp_p
     assert (
         text.startswith("# Page\n\nText above.\n\n") and "\n\nBetween.\n\n" in text and text.endswith("Text below.\n")
     )
-    assert _sync(tmp_path, "--check").returncode == 0
-    assert _sync(tmp_path).stdout.count("rewrote 0 docs file(s)") == 1  # idempotent
+    assert _sync(run_main, tmp_path, "--check").returncode == 0
+    assert _sync(run_main, tmp_path).stdout.count("rewrote 0 docs file(s)") == 1  # idempotent
 
 
-def test_a_fence_of_a_study_without_committed_results_is_refused(tmp_path):
+def test_a_fence_of_a_study_without_committed_results_is_refused(tmp_path, run_main):
     page = _docs_tree(tmp_path)
     page.write_text(page.read_text() + '\n<!-- results: two_tasks "Factor ordering" -->\n<!-- /results -->\n')
     before = page.read_text()
-    result = _sync(tmp_path)
+    result = _sync(run_main, tmp_path)
     assert result.returncode == 1 and "names study 'two_tasks', which has no committed results" in result.stderr
     assert page.read_text() == before  # nothing written
     reports = {"quick": (DATA / "quick" / "results.csv").read_text()}

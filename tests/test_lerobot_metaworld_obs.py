@@ -145,7 +145,7 @@ def test_every_factor_changes_pixels_and_keeps_shapes(make_env):
 
 @pytest.mark.slow
 def test_a_checkpoint_made_for_lerobots_metaworld_env_runs_in_lerobot_eval_unchanged(
-    tmp_path, run_tool, lerobot_metaworld_checkpoint
+    tmp_path, run_lerobot, lerobot_metaworld_checkpoint
 ):
     """A (tiny, untrained) ACT checkpoint built against LeRobot's ``metaworld`` env config: ``lerobot-eval
     --policy.path`` runs it on Factor World, unshifted and under a factor, with no rename or override."""
@@ -154,7 +154,7 @@ def test_a_checkpoint_made_for_lerobots_metaworld_env_runs_in_lerobot_eval_uncha
         k: v for k, v in env_to_policy_features(FactorWorldEnvConfig(task=TASK, obs=OBS)).items() if k != "action"
     }
     out = tmp_path / "eval"
-    run_tool(
+    run_lerobot(
         "lerobot-eval",
         f"--policy.path={checkpoint}",
         "--env.type=factorworld",

@@ -384,10 +384,10 @@ def test_dataset_records_instruction_target_and_object_set_per_episode(pick_data
 
 
 @pytest.mark.slow
-def test_rt1_trains_across_instructions_and_lerobot_eval_reports_every_condition(pick_dataset, tmp_path, run_tool):
+def test_rt1_trains_across_instructions_and_lerobot_eval_reports_every_condition(pick_dataset, tmp_path, run_lerobot):
     root, _ = pick_dataset
     out = tmp_path / "train"
-    run_tool(
+    run_lerobot(
         "lerobot-train",
         "--policy.type=rt1",
         "--policy.preset=small",
@@ -404,7 +404,7 @@ def test_rt1_trains_across_instructions_and_lerobot_eval_reports_every_condition
         f"--output_dir={out}",
     )
     conditions = ["light", "held_out_phrasings", "held_out_objects"]
-    run_tool(
+    run_lerobot(
         "lerobot-eval",
         f"--policy.path={out / 'checkpoints/last/pretrained_model'}",
         "--env.type=factorworld",
@@ -424,10 +424,10 @@ def test_rt1_trains_across_instructions_and_lerobot_eval_reports_every_condition
 
 
 @pytest.mark.slow
-def test_bc_trains_on_instructions_and_lerobot_eval_reports_held_out_phrasings(pick_dataset, tmp_path, run_tool):
+def test_bc_trains_on_instructions_and_lerobot_eval_reports_held_out_phrasings(pick_dataset, tmp_path, run_lerobot):
     """The simulation CNN policy trains on the pick dataset too, conditioned on the instruction's embedding."""
     root, _ = pick_dataset
-    run_tool(
+    run_lerobot(
         "lerobot-train",
         "--policy.type=bc",
         "--policy.use_language=true",
@@ -442,7 +442,7 @@ def test_bc_trains_on_instructions_and_lerobot_eval_reports_held_out_phrasings(p
         "--seed=0",
         f"--output_dir={tmp_path / 'bc'}",
     )
-    run_tool(
+    run_lerobot(
         "lerobot-eval",
         f"--policy.path={tmp_path / 'bc' / 'checkpoints/last/pretrained_model'}",
         "--env.type=factorworld",

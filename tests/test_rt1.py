@@ -4,8 +4,6 @@
 import json
 import os
 import re
-import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -197,51 +195,37 @@ def test_lite0_backbone_loads_the_packaged_imagenet_weights_offline():
 
 
 @pytest.mark.slow
-def test_lerobot_train_lowers_the_loss_and_lerobot_eval_runs_the_checkpoint(tiny_dataset, tmp_path):
-    bin_dir = Path(sys.executable).parent
+def test_lerobot_train_lowers_the_loss_and_lerobot_eval_runs_the_checkpoint(tiny_dataset, tmp_path, run_lerobot):
     out = tmp_path / "train"
-    train = subprocess.run(
-        [
-            str(bin_dir / "lerobot-train"),
-            "--policy.type=rt1",
-            "--policy.device=cpu",
-            "--policy.push_to_hub=false",
-            "--dataset.repo_id=local/pp",
-            f"--dataset.root={tiny_dataset}",  # conftest.py
-            "--steps=40",
-            "--batch_size=4",
-            "--num_workers=0",
-            "--log_freq=5",
-            "--save_freq=40",
-            "--seed=0",
-            f"--output_dir={out}",
-            "--policy.photometric=false",
-        ],
-        capture_output=True,
-        text=True,
-        timeout=900,
+    train = run_lerobot(
+        "lerobot-train",
+        "--policy.type=rt1",
+        "--policy.device=cpu",
+        "--policy.push_to_hub=false",
+        "--dataset.repo_id=local/pp",
+        f"--dataset.root={tiny_dataset}",  # conftest.py
+        "--steps=40",
+        "--batch_size=4",
+        "--num_workers=0",
+        "--log_freq=5",
+        "--save_freq=40",
+        "--seed=0",
+        f"--output_dir={out}",
+        "--policy.photometric=false",
     )
-    assert train.returncode == 0, train.stderr[-3000:]
     losses = [float(v) for v in re.findall(r"loss:(\d+\.\d+)", train.stdout + train.stderr)]
     assert len(losses) >= 4 and np.mean(losses[-2:]) < losses[0] - 0.5, losses
-    checkpoint = out / "checkpoints" / "last" / "pretrained_model"
-    evaluate = subprocess.run(
-        [
-            str(bin_dir / "lerobot-eval"),
-            f"--policy.path={checkpoint}",
-            "--env.type=factorworld",
-            "--env.n_train_envs=1",
-            "--env.train_factors=[light]",
-            "--env.episode_length=10",
-            "--eval.n_episodes=1",
-            "--eval.batch_size=1",
-            f"--output_dir={tmp_path / 'eval'}",
-        ],
-        capture_output=True,
-        text=True,
-        timeout=600,
+    run_lerobot(
+        "lerobot-eval",
+        f"--policy.path={out / 'checkpoints' / 'last' / 'pretrained_model'}",
+        "--env.type=factorworld",
+        "--env.n_train_envs=1",
+        "--env.train_factors=[light]",
+        "--env.episode_length=10",
+        "--eval.n_episodes=1",
+        "--eval.batch_size=1",
+        f"--output_dir={tmp_path / 'eval'}",
     )
-    assert evaluate.returncode == 0, evaluate.stderr[-3000:]
     assert (tmp_path / "eval" / "eval_info.json").is_file()
 
 

@@ -4,6 +4,7 @@
 from __future__ import annotations
 
 import json
+import logging
 import os
 import re
 import subprocess
@@ -15,6 +16,7 @@ from lerobot_factorworld.core.timing import Timings
 from lerobot_factorworld.study.config import StudyConfig
 from lerobot_factorworld.study.executors import can_fork, lend_idle_workers, task_units
 from lerobot_factorworld.study.plan import make_plan
+from lerobot_factorworld.study.steps import as_lerobot_process
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -142,3 +144,26 @@ def test_bench_study_quick_runs_both_executions_with_identical_results():
     lines = proc.stdout.strip().splitlines()
     assert any(line.startswith("identical results") for line in lines), proc.stdout
     assert re.fullmatch(r"ratio: \d+\.\d+", lines[-1]), proc.stdout
+
+
+def test_a_lerobot_command_run_in_process_leaves_the_process_as_it_found_it(tmp_path, run_main):
+    """The grouped execution's in-process ``lerobot-train`` (and the suite's, conftest.py) restores what it set
+    for the run (command line, working directory, torch's threads, ``TOKENIZERS_PARALLELISM``) and logging's
+    handlers, and reports a bad flag as the console script would: a non-zero exit naming the flag."""
+    import torch  # noqa: PLC0415 - LeRobot's training stack (seconds): this test only
+    from lerobot.scripts import lerobot_train  # noqa: PLC0415
+
+    def state():
+        root = logging.getLogger()
+        tokenizers = os.environ.get("TOKENIZERS_PARALLELISM")
+        return list(sys.argv), os.getcwd(), torch.get_num_threads(), tokenizers, list(root.handlers), root.level
+
+    before = state()
+    flags = ["--policy.type=bc", "--no_such_flag=1"]
+    proc = run_main(
+        ["lerobot-train", *flags],
+        lerobot_train.main,
+        as_lerobot_process("lerobot-train", flags, tmp_path, torch.get_num_threads() + 1),
+    )
+    assert proc.returncode != 0 and "no_such_flag" in proc.stderr, proc.stderr[-2000:]
+    assert state() == before

@@ -449,27 +449,36 @@ def _train_subprocess(cmd: list[str], folder: Path, threads: int) -> None:
 
 def _train_in_process(args: list[str], folder: Path, threads: int, timings: Timings) -> None:
     """``lerobot-train`` with ``args`` in this (persistent worker) process: no interpreter start and no
-    imports per run. Everything the subprocess would have fixed at its start is fixed here too (torch's
-    threads, the working directory, the command line LeRobot parses; ``lerobot-train`` seeds every RNG
-    itself), so the checkpoint is byte-identical to the subprocess's (``scripts/bench_study.py`` checks)."""
-    import torch  # noqa: PLC0415 - deliberately here: only a training (or evaluating) worker needs torch
-
+    imports per run, and a checkpoint byte-identical to the subprocess's (``scripts/bench_study.py`` checks)."""
     with timings.span("imports"):
         from lerobot.scripts import lerobot_train  # noqa: PLC0415 - LeRobot's training stack (seconds, once)
 
-    saved = (list(sys.argv), os.getcwd(), torch.get_num_threads(), os.environ.get("TOKENIZERS_PARALLELISM"))
     print("lerobot-train (in process) " + " ".join(args), flush=True)
-    sys.argv = ["lerobot-train", *args]
-    os.environ["TOKENIZERS_PARALLELISM"] = "false"
-    torch.set_num_threads(threads)
-    os.chdir(folder)
     try:
-        lerobot_train.main()
+        with as_lerobot_process("lerobot-train", args, folder, threads):
+            lerobot_train.main()
     except SystemExit as err:  # draccus exits on a bad flag
         raise RuntimeError(f"lerobot-train failed (exit {err.code}); log {folder / LOG_FILE}") from None
+
+
+@contextlib.contextmanager
+def as_lerobot_process(command: str, args: list[str], cwd: Path, threads: int) -> Iterator[None]:
+    """Run a LeRobot console script's ``main()`` (``lerobot-train``, ``lerobot-eval``) in this process as a new
+    process would run it: everything such a process fixes at its start is fixed here (the command line
+    LeRobot parses, the working directory, torch's threads, ``TOKENIZERS_PARALLELISM``; the scripts seed every
+    RNG themselves), restored afterwards, and accelerate's process-wide state forgotten."""
+    import torch  # noqa: PLC0415 - deliberately here: only a training (or evaluating) worker needs torch
+
+    saved = (list(sys.argv), os.getcwd(), torch.get_num_threads(), os.environ.get("TOKENIZERS_PARALLELISM"))
+    sys.argv = [command, *args]
+    os.environ["TOKENIZERS_PARALLELISM"] = "false"
+    torch.set_num_threads(threads)
+    os.chdir(cwd)
+    try:
+        yield
     finally:
-        sys.argv, cwd, n, tokenizers = saved
-        os.chdir(cwd)
+        sys.argv, previous_cwd, n, tokenizers = saved
+        os.chdir(previous_cwd)
         torch.set_num_threads(n)
         if tokenizers is None:
             os.environ.pop("TOKENIZERS_PARALLELISM", None)
@@ -479,8 +488,7 @@ def _train_in_process(args: list[str], folder: Path, threads: int, timings: Timi
 
 
 def _reset_accelerate() -> None:
-    """Forget accelerate's process-wide state, so that the next in-process training starts as a new
-    process would."""
+    """Forget accelerate's process-wide state, so that the next in-process run starts as a new process would."""
     from accelerate.state import AcceleratorState, GradientState, PartialState  # noqa: PLC0415 - with lerobot-train only
 
     for state in (AcceleratorState, GradientState, PartialState):
