@@ -264,45 +264,41 @@ def factorworld_checkpoint(build_once) -> Path:
 # --- scheduling --------------------------------------------------------------------------------------
 
 # Seconds a test (or an xdist group, summed) took in a full run (`pytest -n auto --durations=40`, 2026-11-26, on
-# the 2 cores beside a niced study; each worker and its processes capped to one thread by pytest_configure); a
+# the idle 2 cores; each worker and its processes capped to one thread by pytest_configure; the first in-process
+# `lerobot-train` / `lerobot-eval` of a worker pays its imports, the others about none); a
 # test not listed counts as SLOW_DEFAULT when marked slow, else 0 (kept in file order after the listed ones). Only
 # the order depends on these numbers: update them when a test becomes one of the longest.
 EXPECTED_SECONDS = {
-    "toy_study": 120.0,  # the xdist group of tests/test_study.py's toy study (local, rerun, reuse, a part on Ray)
-    "tests/test_lerobot_metaworld_obs.py::test_round_trip_from_lerobots_own_metaworld_data": 107.0,
-    "tests/test_throughput.py::test_bench_study_quick_runs_both_executions_with_identical_results": 63.0,
-    "tests/test_bench_scripts.py::test_bench_script_quick_prints_ratio_last[collect]": 52.0,
-    "tests/test_docs_results.py::test_the_sync_script_rewrites_fenced_tables_and_check_finds_stale_ones": 49.0,
-    "tests/test_bench_scripts.py::test_bench_script_quick_prints_ratio_last[bc]": 40.0,
-    "tests/test_pick.py::test_rt1_trains_across_instructions_and_lerobot_eval_reports_every_condition": 40.0,
-    "tests/test_rt1.py::test_lerobot_train_lowers_the_loss_and_lerobot_eval_runs_the_checkpoint": 37.0,
-    "tests/test_pick.py::test_bc_trains_on_instructions_and_lerobot_eval_reports_held_out_phrasings": 35.0,
-    "tests/test_bc.py::test_lerobot_train_frozen_encoder_then_lerobot_eval_without_its_weights_file[r3m_rn50]": 28.0,
-    "tests/test_rerun.py::test_the_cpu_fingerprint_hashes_each_layer_and_a_oneDNN_cap_leaves_pixels_and_physics_alone": 25.0,
-    "tests/test_lerobot_metaworld_obs.py::test_the_docs_comparison_script_finds_lerobots_frames_and_states": 25.0,
-    "tests/test_datasets.py::test_killed_collection_resumes_without_duplicates": 22.0,
-    "tests/test_pick.py::test_expert_succeeds_in_default_scenes_and_under_physical_shifts": 22.0,
-    "tests/test_profile.py::test_profile_writes_a_studys_outputs_without_collecting_or_training": 22.0,
-    "tests/test_bc.py::test_lerobot_train_frozen_encoder_then_lerobot_eval_without_its_weights_file[clip_rn50]": 20.0,
-    "tests/test_experts.py::test_expert_solves_default_and_each_physical_shift[pick-place]": 20.0,
-    "tests/test_study.py::test_cli_dry_run_and_one_line_errors": 18.0,
-    "tests/test_pick.py::test_held_out_objects_and_phrasings_never_appear_in_training_environments": 17.0,
+    "toy_study": 90.0,  # the xdist group of tests/test_study.py's toy study (local, rerun, reuse, a part on Ray)
+    "tests/test_lerobot_metaworld_obs.py::test_round_trip_from_lerobots_own_metaworld_data": 128.0,
+    "tests/test_throughput.py::test_bench_study_quick_runs_both_executions_with_identical_results": 69.0,
+    "tests/test_bench_scripts.py::test_bench_script_quick_prints_ratio_last[collect]": 54.0,
+    "tests/test_bench_scripts.py::test_bench_script_quick_prints_ratio_last[bc]": 46.0,
+    "tests/test_pick.py::test_expert_succeeds_in_default_scenes_and_under_physical_shifts": 28.0,
+    "tests/test_lerobot_metaworld_obs.py::test_the_docs_comparison_script_finds_lerobots_frames_and_states": 26.0,
+    "tests/test_datasets.py::test_lerobot_train_runs_on_the_collected_dataset": 25.0,
+    "tests/test_datasets.py::test_killed_collection_resumes_without_duplicates": 24.0,
+    "tests/test_rerun.py::test_the_cpu_fingerprint_hashes_each_layer_and_a_oneDNN_cap_leaves_pixels_and_physics_alone": 23.0,
+    "tests/test_study.py::test_cli_dry_run_and_one_line_errors": 22.0,
+    "tests/test_pick.py::test_held_out_objects_and_phrasings_never_appear_in_training_environments": 21.0,
+    "tests/test_experts.py::test_expert_solves_default_and_each_physical_shift[bin-picking]": 20.0,
+    "tests/test_experts.py::test_expert_solves_default_and_each_physical_shift[pick-place]": 19.0,
+    "tests/test_lerobot.py::test_lerobot_eval_runs_a_lerobot_policy_on_factorworld": 18.0,
+    "tests/test_pick.py::test_rt1_trains_across_instructions_and_lerobot_eval_reports_every_condition": 16.0,
     "tests/test_docs_results.py::test_every_committed_report_and_fenced_docs_table_is_what_its_results_csv_regenerates": 16.0,
-    "tests/test_bc.py::test_lerobot_train_conv_with_shift_and_color": 13.0,
-    "tests/test_compat.py::test_dataset_sidecars_are_byte_identical[sidecar_door-open.json]": 13.0,
-    "tests/test_profile.py::test_profile_of_a_lerobot_metaworld_checkpoint": 13.0,
-    "tests/test_lerobot.py::test_lerobot_eval_runs_a_lerobot_policy_on_factorworld": 13.0,
-    "tests/test_lerobot_metaworld_obs.py::test_a_checkpoint_made_for_lerobots_metaworld_env_runs_in_lerobot_eval_unchanged": 12.0,
-    "tests/test_compat.py::test_dataset_sidecars_are_byte_identical[sidecar_pick.json]": 12.0,
-    "tests/test_experts.py::test_expert_solves_default_and_each_physical_shift[bin-picking]": 12.0,
-    "tests/test_bc.py::test_lerobot_train_frozen_encoder_then_lerobot_eval_without_its_weights_file[lite0]": 12.0,
+    "tests/test_profile.py::test_profile_of_a_lerobot_metaworld_checkpoint": 16.0,
+    "tests/test_rt1.py::test_lerobot_train_lowers_the_loss_and_lerobot_eval_runs_the_checkpoint": 15.0,
+    "tests/test_compat.py::test_dataset_sidecars_are_byte_identical[sidecar_door-open.json]": 15.0,
+    "tests/test_compat.py::test_dataset_sidecars_are_byte_identical[sidecar_pick.json]": 15.0,
+    "tests/test_profile.py::test_profile_writes_a_studys_outputs_without_collecting_or_training": 13.0,
+    "tests/test_bc.py::test_lerobot_train_frozen_encoder_then_lerobot_eval_without_its_weights_file[r3m_rn50]": 12.0,
     "tests/test_experts.py::test_expert_solves_default_and_each_physical_shift[basketball]": 11.0,
-    "tests/test_datasets.py::test_lerobot_train_runs_on_the_collected_dataset": 11.0,
+    "tests/test_bc.py::test_lerobot_train_frozen_encoder_then_lerobot_eval_without_its_weights_file[clip_rn50]": 10.0,
     "tests/test_experts.py::test_expert_solves_default_and_each_physical_shift[pick]": 10.0,
-    "tests/test_docs_results.py::test_a_fence_of_a_study_without_committed_results_is_refused": 10.0,
-    "tests/test_experts.py::test_expert_solves_default_and_each_physical_shift[door-open]": 10.0,
-    "tests/test_docs_results.py::test_report_command_regenerates_report_and_plots_from_a_results_csv_alone": 10.0,
+    "tests/test_pick.py::test_episodes_are_paired_across_conditions_even_when_a_shift_pins_the_object_position": 10.0,
     "tests/test_lerobot.py::test_lerobot_eval_fails_on_a_bad_env_setting_before_building_a_policy": 9.0,
+    "tests/test_bench_scripts.py::test_bench_script_quick_prints_ratio_last[env]": 9.0,
+    "tests/test_datasets.py::test_offline_push_fails_clearly_and_loses_nothing": 9.0,
 }
 SLOW_DEFAULT = 10.0
 
