@@ -12,6 +12,8 @@ import sys
 import time
 from pathlib import Path
 
+import pytest
+
 from lerobot_factorworld.core.timing import Timings
 from lerobot_factorworld.study.config import StudyConfig
 from lerobot_factorworld.study.executors import can_fork, lend_idle_workers, task_units
@@ -167,3 +169,47 @@ def test_a_lerobot_command_run_in_process_leaves_the_process_as_it_found_it(tmp_
     )
     assert proc.returncode != 0 and "no_such_flag" in proc.stderr, proc.stderr[-2000:]
     assert state() == before
+
+
+def _worker_state() -> tuple[bool, bool, bool]:
+    """In a study worker: were LeRobot's training stack and the simulation imported, and the provenance read,
+    before this task ran?"""
+    from lerobot_factorworld.core import provenance
+
+    return (
+        "lerobot.scripts.lerobot_train" in sys.modules,
+        "lerobot_factorworld.envs.factor_env" in sys.modules,
+        provenance.current.cache_info().currsize == 1,
+    )
+
+
+@pytest.mark.slow
+def test_a_grouped_study_in_a_process_with_threads_forks_preloaded_workers(tmp_path):
+    """Where this process cannot be forked (another thread), a grouped study's workers come from the forkserver,
+    which imported what steps import and read the provenance once: each worker starts with both (a spawned
+    worker would import for 8-20 s). The per_step execution keeps fresh spawned workers."""
+    import threading
+
+    from lerobot_factorworld.study.executors import LocalExecutor
+
+    stop = threading.Event()
+    thread = threading.Thread(target=stop.wait)
+    thread.start()
+    try:
+        assert not can_fork()
+        executor = LocalExecutor(str(tmp_path), 2, "grouped")
+        try:
+            assert executor.pool._mp_context.get_start_method() == "forkserver"
+            assert executor.pool.submit(_worker_state).result() == (True, True, True)
+        finally:
+            executor.shutdown()
+        per_step = LocalExecutor(str(tmp_path), 1, "per_step")
+        try:
+            assert per_step.pool._mp_context.get_start_method() == "spawn"
+            trained, _, read = per_step.pool.submit(_worker_state).result()  # (this module imports the simulation)
+            assert not trained and read  # read by the initializer
+        finally:
+            per_step.shutdown()
+    finally:
+        stop.set()
+        thread.join()

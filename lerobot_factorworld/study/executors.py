@@ -20,6 +20,9 @@ from ..core import provenance
 from ..envs import runtime
 from .steps import RUN, Step, evaluated, run_steps, warm_up
 
+# The module the forkserver imports (by name: importing it here would import everything in this process).
+FORKSERVER_PRELOAD = f"{__package__}.forkserver_preload"
+
 
 class Executor(Protocol):
     def submit(self, steps: Sequence[Step]) -> Any: ...
@@ -59,8 +62,10 @@ class LocalExecutor:
     ``grouped``: this process imports what steps import (:func:`warm_up`, about 2 s on top of what the command
     line already imported) and then forks the workers, which start with everything imported: each of them
     had paid 15-20 s for it, on the study's critical path, when they were spawned and warmed side by side
-    on 2 cores. Forking needs a process that can be forked safely (:func:`can_fork`); otherwise the workers
-    are spawned and warmed at once, in parallel."""
+    on 2 cores. Forking needs a process that can be forked safely (:func:`can_fork`); otherwise (a process
+    with threads: a notebook's kernel, pytest's workers) the workers are forked from multiprocessing's
+    forkserver, a fresh single-threaded process that imports once (:mod:`.forkserver_preload`) and lives as
+    long as this process, so later studies in it start their workers at once too."""
 
     def __init__(self, study_dir: str, workers: int, execution: str = "per_step") -> None:
         self.study_dir = study_dir
@@ -71,11 +76,13 @@ class LocalExecutor:
         # Each worker hashes the package source as it starts, when it imports it: an edit made during the
         # study is then told apart from the code the worker runs (provenance is read once per process; a
         # forked worker inherits this process's, read before the study started).
-        context = get_context("fork" if fork else "spawn")
+        context = get_context("fork" if fork else "forkserver" if execution == "grouped" else "spawn")
+        if context.get_start_method() == "forkserver":  # before its server starts (it then ignores the list)
+            context.set_forkserver_preload([FORKSERVER_PRELOAD])
         self.pool = cf.ProcessPoolExecutor(workers, mp_context=context, initializer=provenance.current)
         if fork:  # fork every worker now, before this process starts any thread (progress bars' monitor)
             self.pool.submit(os.getpid).result()
-        elif execution == "grouped":  # every worker starts and imports now, in parallel, not in its first step
+        elif execution == "grouped":  # every worker starts now, not in its first step
             for _ in range(workers):
                 self.pool.submit(warm_up)
 
