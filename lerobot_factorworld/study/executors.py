@@ -73,9 +73,10 @@ class LocalExecutor:
         fork = execution == "grouped" and can_fork()
         if fork:
             warm_up()
-        # Each worker hashes the package source as it starts, when it imports it: an edit made during the
-        # study is then told apart from the code the worker runs (provenance is read once per process; a
-        # forked worker inherits this process's, read before the study started).
+        # A spawned worker hashes the package source as it starts, when it imports it: an edit made during the
+        # study is then told apart from the code the worker runs (provenance is read once per process). A
+        # forked worker inherits the provenance of the process it is forked from, read when that process
+        # imported the code: this process's, before the study started, or the forkserver's, at its start.
         context = get_context("fork" if fork else "forkserver" if execution == "grouped" else "spawn")
         if context.get_start_method() == "forkserver":  # before its server starts (it then ignores the list)
             context.set_forkserver_preload([FORKSERVER_PRELOAD])
