@@ -118,6 +118,29 @@ def _run_lerobot(command: str, *args: str) -> subprocess.CompletedProcess:
     return proc
 
 
+def _eval_one_light_episode(checkpoint: Path, out: Path) -> None:
+    """``lerobot-eval`` of ``checkpoint`` (made for the ``factorworld`` env's default observation) for one short
+    episode in one training environment under the light factor, writing ``out/eval_info.json``."""
+    _run_lerobot(
+        "lerobot-eval",
+        f"--policy.path={checkpoint}",
+        "--env.type=factorworld",
+        "--env.n_train_envs=1",
+        "--env.train_factors=[light]",
+        "--env.episode_length=10",
+        "--eval.n_episodes=1",
+        "--eval.batch_size=1",
+        f"--output_dir={out}",
+    )
+    assert (out / "eval_info.json").is_file()
+
+
+@pytest.fixture
+def eval_one_light_episode():
+    """Evaluate a checkpoint for one short episode in process (:func:`_eval_one_light_episode`)."""
+    return _eval_one_light_episode
+
+
 @pytest.fixture
 def run_lerobot():
     """Run ``lerobot-train`` or ``lerobot-eval`` in this process (:func:`_run_lerobot`); assert it succeeded."""

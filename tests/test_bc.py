@@ -337,7 +337,7 @@ def test_lerobot_train_conv_with_shift_and_color(tiny_dataset, tmp_path, run_ler
 @pytest.mark.slow
 @pytest.mark.parametrize("encoder", ["lite0", "clip_rn50", "r3m_rn50"])
 def test_lerobot_train_frozen_encoder_then_lerobot_eval_without_its_weights_file(
-    tiny_dataset, weights, tmp_path, encoder, run_lerobot
+    tiny_dataset, weights, tmp_path, encoder, run_lerobot, eval_one_light_episode
 ):
     args = [f"--policy.encoder={encoder}"]
     if encoder in weights:
@@ -349,15 +349,4 @@ def test_lerobot_train_frozen_encoder_then_lerobot_eval_without_its_weights_file
     if encoder != "r3m_rn50":
         return  # one lerobot-eval run is enough: every encoder reloads through the same from_pretrained
     copy.unlink()
-    run_lerobot(
-        "lerobot-eval",
-        f"--policy.path={tmp_path / 'train' / 'checkpoints' / 'last' / 'pretrained_model'}",
-        "--env.type=factorworld",
-        "--env.n_train_envs=1",
-        "--env.train_factors=[light]",
-        "--env.episode_length=10",
-        "--eval.n_episodes=1",
-        "--eval.batch_size=1",
-        f"--output_dir={tmp_path / 'eval'}",
-    )
-    assert (tmp_path / "eval" / "eval_info.json").is_file()
+    eval_one_light_episode(tmp_path / "train" / "checkpoints" / "last" / "pretrained_model", tmp_path / "eval")

@@ -195,7 +195,9 @@ def test_lite0_backbone_loads_the_packaged_imagenet_weights_offline():
 
 
 @pytest.mark.slow
-def test_lerobot_train_lowers_the_loss_and_lerobot_eval_runs_the_checkpoint(tiny_dataset, tmp_path, run_lerobot):
+def test_lerobot_train_lowers_the_loss_and_lerobot_eval_runs_the_checkpoint(
+    tiny_dataset, tmp_path, run_lerobot, eval_one_light_episode
+):
     out = tmp_path / "train"
     train = run_lerobot(
         "lerobot-train",
@@ -215,18 +217,7 @@ def test_lerobot_train_lowers_the_loss_and_lerobot_eval_runs_the_checkpoint(tiny
     )
     losses = [float(v) for v in re.findall(r"loss:(\d+\.\d+)", train.stdout + train.stderr)]
     assert len(losses) >= 4 and np.mean(losses[-2:]) < losses[0] - 0.5, losses
-    run_lerobot(
-        "lerobot-eval",
-        f"--policy.path={out / 'checkpoints' / 'last' / 'pretrained_model'}",
-        "--env.type=factorworld",
-        "--env.n_train_envs=1",
-        "--env.train_factors=[light]",
-        "--env.episode_length=10",
-        "--eval.n_episodes=1",
-        "--eval.batch_size=1",
-        f"--output_dir={tmp_path / 'eval'}",
-    )
-    assert (tmp_path / "eval" / "eval_info.json").is_file()
+    eval_one_light_episode(out / "checkpoints" / "last" / "pretrained_model", tmp_path / "eval")
 
 
 def test_per_sample_loss_matches_the_mean_loss():
