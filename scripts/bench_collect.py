@@ -236,8 +236,8 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     args = parser.parse_args(argv)
     if args.quick:
         args.demos, args.rounds = 2, 1
-    if args.demos < 1 or args.rounds < 1:
-        parser.error("--demos and --rounds must be at least 1")
+    if args.demos < N_ENVS or args.rounds < 1:  # the collector takes at least one demo per environment
+        parser.error(f"--demos must be at least {N_ENVS} (one per environment) and --rounds at least 1")
     _bench.check_tasks(parser, args.task)
     return args
 

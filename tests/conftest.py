@@ -101,12 +101,12 @@ def run_main():
     return _run_main
 
 
-def _run_lerobot(command: str, *args: str) -> subprocess.CompletedProcess:
+def _run_lerobot(command: str, *args: str, check: bool = True) -> subprocess.CompletedProcess:
     """``lerobot-train`` or ``lerobot-eval`` with ``args``: their console script's ``main()`` run in this worker
-    process as a study's grouped execution trains (``study/steps.py: as_lerobot_process``); asserts it
-    succeeded. The same code as the console script without the ~7 s of imports a new process pays; the console
-    scripts themselves run as processes in tests/test_datasets.py (``lerobot-train``), tests/test_lerobot.py
-    (``lerobot-eval``) and the LeRobot round trip (both)."""
+    process as a study's grouped execution trains (``study/steps.py: as_lerobot_process``); with ``check``,
+    asserts it succeeded. The same code as the console script without the ~7 s of imports a new process pays;
+    the console scripts themselves, found on the PATH with the ``factorworld`` env discovered as a plugin by a
+    fresh process, run as processes in the LeRobot round trip (tests/test_lerobot_metaworld_obs.py: both)."""
     # LeRobot's training and evaluation stacks (seconds): imported by the slow tests only.
     import torch  # noqa: PLC0415
     from lerobot.scripts import lerobot_eval, lerobot_train  # noqa: PLC0415
@@ -114,7 +114,7 @@ def _run_lerobot(command: str, *args: str) -> subprocess.CompletedProcess:
     main = {"lerobot-train": lerobot_train.main, "lerobot-eval": lerobot_eval.main}[command]
     process = as_lerobot_process(command, list(args), Path.cwd(), torch.get_num_threads())
     proc = _run_main([command, *args], main, process)
-    assert proc.returncode == 0, proc.stderr[-3000:]
+    assert proc.returncode == 0 or not check, proc.stderr[-3000:]
     return proc
 
 
@@ -143,7 +143,7 @@ def eval_one_light_episode():
 
 @pytest.fixture
 def run_lerobot():
-    """Run ``lerobot-train`` or ``lerobot-eval`` in this process (:func:`_run_lerobot`); assert it succeeded."""
+    """Run ``lerobot-train`` or ``lerobot-eval`` in this process (:func:`_run_lerobot`)."""
     return _run_lerobot
 
 
@@ -299,14 +299,13 @@ EXPECTED_SECONDS = {
     "tests/test_bench_scripts.py::test_bench_script_quick_prints_ratio_last[bc]": 46.0,
     "tests/test_pick.py::test_expert_succeeds_in_default_scenes_and_under_physical_shifts": 28.0,
     "tests/test_lerobot_metaworld_obs.py::test_the_docs_comparison_script_finds_lerobots_frames_and_states": 26.0,
-    "tests/test_datasets.py::test_lerobot_train_runs_on_the_collected_dataset": 25.0,
+    "tests/test_datasets.py::test_lerobot_train_runs_on_the_collected_dataset": 16.0,  # its dataset fixture: 12
     "tests/test_datasets.py::test_killed_collection_resumes_without_duplicates": 24.0,
     "tests/test_rerun.py::test_the_cpu_fingerprint_hashes_each_layer_and_a_oneDNN_cap_leaves_pixels_and_physics_alone": 23.0,
     "tests/test_study.py::test_cli_dry_run_and_one_line_errors": 22.0,
     "tests/test_pick.py::test_held_out_objects_and_phrasings_never_appear_in_training_environments": 21.0,
     "tests/test_experts.py::test_expert_solves_default_and_each_physical_shift[bin-picking]": 20.0,
     "tests/test_experts.py::test_expert_solves_default_and_each_physical_shift[pick-place]": 19.0,
-    "tests/test_lerobot.py::test_lerobot_eval_runs_a_lerobot_policy_on_factorworld": 18.0,
     "tests/test_pick.py::test_rt1_trains_across_instructions_and_lerobot_eval_reports_every_condition": 16.0,
     "tests/test_docs_results.py::test_every_committed_report_and_fenced_docs_table_is_what_its_results_csv_regenerates": 16.0,
     "tests/test_profile.py::test_profile_of_a_lerobot_metaworld_checkpoint": 16.0,
@@ -319,7 +318,6 @@ EXPECTED_SECONDS = {
     "tests/test_bc.py::test_lerobot_train_frozen_encoder_then_lerobot_eval_without_its_weights_file[clip_rn50]": 10.0,
     "tests/test_experts.py::test_expert_solves_default_and_each_physical_shift[pick]": 10.0,
     "tests/test_pick.py::test_episodes_are_paired_across_conditions_even_when_a_shift_pins_the_object_position": 10.0,
-    "tests/test_lerobot.py::test_lerobot_eval_fails_on_a_bad_env_setting_before_building_a_policy": 9.0,
     "tests/test_bench_scripts.py::test_bench_script_quick_prints_ratio_last[env]": 9.0,
     "tests/test_datasets.py::test_offline_push_fails_clearly_and_loses_nothing": 9.0,
 }

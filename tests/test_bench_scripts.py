@@ -42,3 +42,16 @@ def test_bench_script_quick_prints_ratio_last(script, expected_rows, timeout):
     assert float(match.group(1)) > 0.0
     for row in expected_rows:
         assert any(line.startswith(row) for line in lines), row
+
+
+def test_bench_collect_refuses_fewer_demos_than_environments_in_one_line():
+    """The collector takes one demo per environment at least: said before any work, not as a child's traceback."""
+    proc = subprocess.run(
+        [sys.executable, str(SCRIPTS / "bench_collect.py"), "--demos", "1"], capture_output=True, text=True, timeout=60
+    )
+    assert proc.returncode == 2 and "Traceback" not in proc.stderr, proc.stderr[-2000:]
+    assert (
+        proc.stderr.strip()
+        .splitlines()[-1]
+        .endswith("--demos must be at least 2 (one per environment) and --rounds at least 1")
+    )

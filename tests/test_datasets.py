@@ -157,10 +157,10 @@ def test_offline_push_fails_clearly_and_loses_nothing(dataset, tmp_path):
 
 
 @pytest.mark.slow
-def test_lerobot_train_runs_on_the_collected_dataset(dataset, tmp_path):
+def test_lerobot_train_runs_on_the_collected_dataset(dataset, tmp_path, run_lerobot):
     root, _ = dataset
-    cmd = [
-        str(Path(sys.executable).with_name("lerobot-train")),
+    run_lerobot(
+        "lerobot-train",
         "--dataset.repo_id=local/tiny",
         f"--dataset.root={root}",
         "--policy.type=act",
@@ -178,9 +178,7 @@ def test_lerobot_train_runs_on_the_collected_dataset(dataset, tmp_path):
         "--save_freq=3",
         f"--output_dir={tmp_path / 'train'}",
         "--log_freq=1",
-    ]
-    out = subprocess.run(cmd, capture_output=True, text=True, timeout=600)
-    assert out.returncode == 0, out.stderr[-3000:]
+    )
     assert (tmp_path / "train" / "checkpoints" / "000003" / "pretrained_model" / "model.safetensors").is_file()
 
 

@@ -2,15 +2,9 @@
 reports success per evaluation condition (train, each shifted factor, each pair)."""
 
 import json
-import os
 import shutil
-import subprocess
-import sys
-from pathlib import Path
 
 import pytest
-
-LEROBOT_EVAL = Path(sys.executable).with_name("lerobot-eval")
 
 
 def test_env_config_builds_one_suite_per_condition():
@@ -33,10 +27,10 @@ def test_env_config_builds_one_suite_per_condition():
 
 
 @pytest.mark.slow
-def test_lerobot_eval_runs_a_lerobot_policy_on_factorworld(tmp_path):
+def test_lerobot_eval_runs_a_lerobot_policy_on_factorworld(tmp_path, run_lerobot):
     out = tmp_path / "eval"
-    cmd = [
-        str(LEROBOT_EVAL),
+    run_lerobot(
+        "lerobot-eval",
         "--env.type=factorworld",
         "--env.task=door-open",
         "--env.shifts=[camera_pos]",
@@ -49,10 +43,7 @@ def test_lerobot_eval_runs_a_lerobot_policy_on_factorworld(tmp_path):
         "--eval.n_episodes=2",
         "--eval.batch_size=1",
         f"--output_dir={out}",
-    ]
-    env = {**os.environ, "MUJOCO_GL": "egl"}
-    result = subprocess.run(cmd, capture_output=True, text=True, env=env, timeout=600)
-    assert result.returncode == 0, result.stderr[-3000:]
+    )
     info = json.loads((out / "eval_info.json").read_text())
     assert set(info["per_group"]) == {"train", "camera_pos"}
     assert info["overall"]["n_episodes"] == 4
@@ -107,17 +98,17 @@ def test_env_config_checks_the_configs_file_and_asset_folders(tmp_path):
         FactorWorldEnvConfig(sampling=SamplingOptions(texture_folder=str(tmp_path)))
 
 
-def test_lerobot_eval_fails_on_a_bad_env_setting_before_building_a_policy(tmp_path):
-    cmd = [
-        str(LEROBOT_EVAL),
+def test_lerobot_eval_fails_on_a_bad_env_setting_before_building_a_policy(tmp_path, run_lerobot):
+    result = run_lerobot(
+        "lerobot-eval",
         "--env.type=factorworld",
         "--env.task=door-open",
         "--env.shifts=[object_shape]",
         "--policy.type=act",
         "--policy.device=cpu",
         f"--output_dir={tmp_path / 'eval'}",
-    ]
-    result = subprocess.run(cmd, capture_output=True, text=True, env={**os.environ, "MUJOCO_GL": "egl"}, timeout=300)
+        check=False,
+    )
     assert result.returncode != 0
     output = result.stdout + result.stderr
     assert "factor 'object_shape' does not apply to task 'door-open'" in output, output[-3000:]

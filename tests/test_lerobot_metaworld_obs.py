@@ -179,7 +179,9 @@ def test_round_trip_from_lerobots_own_metaworld_data(tmp_path):
     under ``--env.type=metaworld`` and under our unshifted ``lerobot_metaworld`` condition on the same seeds:
     the success rates agree within their intervals, episode by episode (the simulation and pixels are the same).
     One demo and one episode: the smallest run that still trains a policy that succeeds (the pixels' equality is
-    checked frame by frame in the comparison script's test below)."""
+    checked frame by frame in the comparison script's test below). It is also the suite's run of both console
+    scripts as new processes (the other tests call their ``main()`` in process): ``lerobot-eval`` there finds the
+    ``factorworld`` env type through LeRobot's plugin discovery alone."""
     out = tmp_path / "round_trip"
     script = Path(__file__).resolve().parents[1] / "scripts" / "lerobot_metaworld_round_trip.py"
     proc = subprocess.run(
