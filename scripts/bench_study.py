@@ -67,12 +67,17 @@ def run_way(way: str, grid: dict, folder: Path) -> float:
     return seconds
 
 
+# How a checkpoint's data was loaded (``steps.loader_args``: in process, or by a lent worker), which its
+# ``train_config.json`` records: the weights and processors are the same either way, byte for byte.
+LOADER_FIELDS = ("num_workers", "persistent_workers", "dataloader_multiprocessing_context", "prefetch_factor")
+
+
 def digests(study: Path) -> dict[str, str]:
     """SHA-256 of every file that is a result: ``results.csv``, the checkpoints, the datasets. Byte for byte,
-    except two things that differ between any two runs whatever the execution: a JSON file is compared
-    as data with its keys sorted (LeRobot writes a dataset's ``stats.json`` keys in set order, which
-    changes with every process's hash seed), and the study folder's own path (a checkpoint's
-    ``train_config.json`` names its dataset and output folder) is replaced by ``<study>``."""
+    except three things that are not results: a JSON file is compared as data with its keys sorted (LeRobot
+    writes a dataset's ``stats.json`` keys in set order, which changes with every process's hash seed), the
+    study folder's own path (a checkpoint's ``train_config.json`` names its dataset and output folder) is
+    replaced by ``<study>``, and ``train_config.json``'s data-loading settings (``LOADER_FIELDS``) are left out."""
     files = [study / "results.csv"]
     files += sorted((study / "steps" / "train").glob("*/train/checkpoints/**/pretrained_model/*"))
     files += sorted(p for p in (study / "steps" / "collect").glob("*/data/**/*") if p.is_file())
@@ -82,7 +87,10 @@ def digests(study: Path) -> dict[str, str]:
             continue
         data = path.read_bytes()
         if path.suffix == ".json":
-            text = json.dumps(json.loads(data), sort_keys=True).replace(str(study.resolve()), "<study>")
+            content = json.loads(data)
+            if path.name == "train_config.json":
+                content = {k: v for k, v in content.items() if k not in LOADER_FIELDS}
+            text = json.dumps(content, sort_keys=True).replace(str(study.resolve()), "<study>")
             data = text.encode()
         out[str(path.relative_to(study))] = hashlib.sha256(data).hexdigest()
     return out

@@ -68,7 +68,7 @@ def test_grouped_tasks_hold_one_checkpoints_evaluations_and_split_for_idle_worke
     assert [len(u) for u in mixed] == [3, 1, 1]
 
 
-def test_idle_workers_are_lent_to_a_collection_without_changing_its_key(tmp_path):
+def test_idle_workers_are_lent_to_a_collection_or_a_lone_training_without_changing_its_key(tmp_path):
     plan = make_plan(_cfg(tmp_path))
     collects, trains = plan.of_kind("collect"), plan.of_kind("train")
     (alone,) = task_units(collects[:1], 3, grouped=True)  # two workers idle: the collection gets them
@@ -78,7 +78,11 @@ def test_idle_workers_are_lent_to_a_collection_without_changing_its_key(tmp_path
     assert [u[0].run["workers"] for u in both] == [2, 1]
     mixed = task_units([*trains[:1], *collects[:1]], 2, grouped=True)  # every worker busy: nothing to lend
     assert [u[0].run.get("workers", 1) for u in mixed] == [1, 1]
-    assert lend_idle_workers([[trains[0]]], 2) == [[trains[0]]]  # only collections take more processes
+    ((train,),) = lend_idle_workers([[trains[0]]], 2)  # a training alone: the idle worker loads its data
+    assert train.key == trains[0].key and train.run["loader_workers"] == 1 and "loader_workers" not in trains[0].run
+    lent = lend_idle_workers([[trains[0]], [collects[0]]], 3)  # a collection first takes what is idle
+    assert lent[0][0].run.get("loader_workers", 0) == 0 and lent[1][0].run["workers"] == 2
+    assert lend_idle_workers([[trains[0]], [trains[1]]], 2) == [[trains[0]], [trains[1]]]  # nothing idle
     assert task_units(collects[:1], 3, grouped=False)[0][0].run.get("workers", 1) == 1  # per_step: as planned
 
 

@@ -223,19 +223,27 @@ def task_units(ready: list[Step], free: int, grouped: bool) -> list[list[Step]]:
 def lend_idle_workers(units: list[list[Step]], free: int) -> list[list[Step]]:
     """``units`` with the workers they leave idle lent to their collections: a collection's jobs then run in
     that many more processes (``collect.workers`` never changes what is collected, so it is not in the key).
-    The first collections get them first, one each in turn."""
+    The first collections get them first, one each in turn. With no collection to lend to, a training alone
+    gets one as its data loader (``steps.loader_args``: the same checkpoint, byte for byte)."""
     spare = free - len(units)
     collects = [i for i, unit in enumerate(units[:free]) if unit[0].kind == "collect"]
+    trains = [i for i, unit in enumerate(units[:free]) if unit[0].kind == "train"]
     extra = dict.fromkeys(collects, 0)
     for n in range(max(0, spare) if collects else 0):
         extra[collects[n % len(collects)]] += 1
     out = list(units)
     for i, more in extra.items():
         if more:
-            step = units[i][0]
-            run = {**step.run, "workers": step.run.get("workers", 1) + more}
-            out[i] = [Step(step.kind, step.inputs, step.deps, {**step.meta, RUN: run})]
+            out[i] = [_with_run(units[i][0], workers=units[i][0].run.get("workers", 1) + more)]
+    if not collects:
+        for i in trains[: max(0, spare)]:
+            out[i] = [_with_run(units[i][0], loader_workers=1)]
     return out
+
+
+def _with_run(step: Step, **settings: Any) -> Step:
+    """``step`` with run settings changed (how it runs, never its key or results)."""
+    return Step(step.kind, step.inputs, step.deps, {**step.meta, RUN: {**step.run, **settings}})
 
 
 def make_executor(

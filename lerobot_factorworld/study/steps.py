@@ -27,6 +27,7 @@ import shutil
 import subprocess
 import sys
 import time
+import warnings
 from collections.abc import Iterator
 from dataclasses import dataclass, field
 from importlib import metadata
@@ -402,7 +403,7 @@ def _run_train(step: Step, folder: Path, deps: list[Path]) -> dict[str, Any]:
         f"--steps={steps}",
         f"--batch_size={inputs.batch_size}",
         f"--seed={inputs.seed}",
-        "--num_workers=0",
+        *loader_args(step.run.get("loader_workers", 0) if not stores_video(Path(data["root"])) else 0),
         f"--save_freq={steps}",
         f"--log_freq={max(1, steps // 10)}",
         "--wandb.enable=false",
@@ -425,6 +426,24 @@ def _run_train(step: Step, folder: Path, deps: list[Path]) -> dict[str, Any]:
     # what is left: process start and imports (subprocess), dataset and policy set-up, checkpoint saving
     timings.add("startup_save", time.perf_counter() - start - sum(logged.values()) - timings.seconds.get("imports", 0))
     return {"checkpoint": str(checkpoint), "steps": steps}
+
+
+def loader_args(workers: int) -> list[str]:
+    """``lerobot-train``'s data-loading flags for ``workers`` loader processes (0: in the training process).
+    With workers, each epoch forks fresh ones (not persistent): LeRobot's training then draws from torch's global
+    RNG exactly as with loading in process (a data loader iterator draws its base seed when it is created, and
+    persistent workers create it once), so the checkpoint is byte-identical, augmentation included; ``fork``,
+    since a spawned loader would first import LeRobot for seconds every epoch. Only for PNG frames
+    (:func:`stores_video`): LeRobot warns that its video decoders are not safe to fork."""
+    if workers < 1:
+        return ["--num_workers=0"]
+    return [f"--num_workers={workers}", "--persistent_workers=false", "--dataloader_multiprocessing_context=fork"]
+
+
+def stores_video(root: Path) -> bool:
+    """Whether the LeRobotDataset at ``root`` stores any camera as video (``meta/info.json``)."""
+    features = json.loads((root / "meta" / "info.json").read_text())["features"]
+    return any(feature["dtype"] == "video" for feature in features.values())
 
 
 def _merged_training_data(datasets: list[dict[str, Any]], folder: Path, key: str) -> dict[str, Any]:
@@ -455,7 +474,11 @@ def _train_in_process(args: list[str], folder: Path, threads: int, timings: Timi
 
     print("lerobot-train (in process) " + " ".join(args), flush=True)
     try:
-        with as_lerobot_process("lerobot-train", args, folder, threads):
+        with as_lerobot_process("lerobot-train", args, folder, threads), warnings.catch_warnings():
+            # A lent loader (loader_args) forks this worker, whose renderer and arrow threads sit idle meanwhile:
+            # its children only read PNG frames from parquet, so Python's warning about forking with threads is
+            # noise here.
+            warnings.filterwarnings("ignore", r"This process .* is multi-threaded, use of fork\(\)", DeprecationWarning)
             lerobot_train.main()
     except SystemExit as err:  # draccus exits on a bad flag
         raise RuntimeError(f"lerobot-train failed (exit {err.code}); log {folder / LOG_FILE}") from None
