@@ -34,8 +34,6 @@ import time  # noqa: E402
 from pathlib import Path  # noqa: E402
 
 import numpy as np  # noqa: E402
-from lerobot.envs.metaworld import TASK_POLICY_MAPPING  # noqa: E402
-from lerobot.envs.metaworld import MetaworldEnv as LeRobotMetaworldEnv  # noqa: E402
 
 from lerobot_factorworld.envs.factor_env import FactorWorldEnv  # noqa: E402
 from lerobot_factorworld.envs.lerobot_obs import check_lerobot_task  # noqa: E402
@@ -59,6 +57,11 @@ def lerobot_tasks() -> list[str]:
 
 def record_lerobot(tasks: list[str], seeds: list[int], steps: int, state_seeds: int, max_steps: int, out: Path):
     """LeRobot's side of both comparisons, written to ``out`` (an .npz), one env at a time."""
+    # Only the recording child imports LeRobot (seconds): the parent compares through our env alone, and a bad
+    # argument is refused before either pays for it.
+    from lerobot.envs.metaworld import TASK_POLICY_MAPPING  # noqa: PLC0415
+    from lerobot.envs.metaworld import MetaworldEnv as LeRobotMetaworldEnv  # noqa: PLC0415
+
     arrays: dict[str, np.ndarray] = {}
     for task in tasks:
         name = get_task(task).metaworld_name
