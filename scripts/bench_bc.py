@@ -3,7 +3,7 @@
 What is measured
     Datasets: ``factorworld collect --task=<task> --n_envs=2 --demos=<D> --seed=0`` twice, identical except
     for the storage: video (LeRobot's default, AV1 mp4, decoded by torchcodec) and image (``--use_videos=false``,
-    PNG). Collected before any timing, in child processes (``--data DIR`` keeps and reuses them).
+    PNG). Collected before any timing, in this process (``--data DIR`` keeps and reuses them).
 
     One training step is what ``lerobot-train`` does (``lerobot/scripts/lerobot_train.py``), on the same
     objects: ``LeRobotDataset(repo_id, root, delta_timestamps)`` from the policy's delta indices, a
@@ -43,7 +43,7 @@ from __future__ import annotations
 
 import _bench
 
-_bench.setup_headless_gl()  # the collector renders; inherited by the child processes
+_bench.setup_headless_gl()  # before anything imports mujoco: the collector renders in this process
 _bench.add_repo_to_path()
 
 import argparse  # noqa: E402
@@ -64,6 +64,7 @@ from lerobot.policies.factory import make_policy, make_pre_post_processors  # no
 from tqdm import tqdm  # noqa: E402
 
 import lerobot_factorworld.lerobot_plugin  # noqa: E402, F401  (registers bc)
+from lerobot_factorworld.datasets.collect import CollectConfig, collect  # noqa: E402
 from lerobot_factorworld.policies.bc.backbones import (  # noqa: E402
     CLIP_VISUAL_PREFIX,
     R3M_KEY,
@@ -130,23 +131,22 @@ class Result:
 
 
 def collect_datasets(args: argparse.Namespace, data_dir: Path) -> dict[str, Path]:
-    """The two datasets (same demos, video vs image storage), collected by ``factorworld collect``."""
+    """The two datasets (same demos, video vs image storage), collected as ``factorworld collect`` does, in
+    this process and one worker (``workers`` never changes what is collected): no process to start and import."""
     roots = {}
     for storage in STORAGES:
         root = data_dir / storage
-        _bench.run_command(
-            [
-                str(Path(sys.executable).parent / "factorworld"),
-                "collect",
-                f"--task={args.task}",
-                f"--n_envs={N_ENVS}",
-                f"--demos={args.demos}",
-                "--seed=0",
-                f"--use_videos={'true' if storage == 'video' else 'false'}",
-                f"--root={root}",
-                f"--repo_id=local/bench_bc_{storage}",
-            ],
-            f"collecting the {storage} dataset",
+        collect(
+            CollectConfig(
+                task=args.task,
+                n_envs=N_ENVS,
+                demos=args.demos,
+                seed=0,
+                use_videos=storage == "video",
+                root=str(root),
+                repo_id=f"local/bench_bc_{storage}",
+                workers=1,
+            )
         )
         roots[storage] = root
     return roots
