@@ -151,9 +151,12 @@ class RayExecutor:
 
 
 def can_fork() -> bool:
-    """Whether this process can be forked into study workers safely: on Linux, one thread (a fork copies only
-    the calling thread, and a lock another thread holds stays locked in the child), no GL context (the
-    rasteriser's threads would be missing in the child) and no CUDA (it cannot be used again after a fork)."""
+    """Whether this process can be forked into study workers safely: on Linux, one Python thread (a fork copies
+    only the calling thread, and a lock another thread holds stays locked in the child), no GL context (the
+    rasteriser's threads would be missing in the child) and no CUDA (it cannot be used again after a fork).
+    Native threads that libraries start at import are not counted (importing torch starts one, pyarrow's
+    jemalloc another; every forked study so far ran past them), which is why Python 3.12's warning about
+    forking a multi-threaded process can show, under pytest for example."""
     torch = sys.modules.get("torch")
     cuda = torch is not None and torch.cuda.is_initialized()
     return sys.platform == "linux" and threading.active_count() == 1 and not runtime.gl_context_created() and not cuda
