@@ -516,6 +516,8 @@ class StudyConfig:
         self._validate_episodes()
         if self.train.epochs is None and self.train.steps < 1:
             raise ValueError("train.steps must be at least 1 (or set train.epochs)")
+        for method in self.trained_methods():  # last: importing LeRobot's policy configs takes seconds
+            check_policy(method)
 
     def _validate_hub(self) -> None:
         """A push names its dataset repo, checked with the other settings (the token is the runner's check)."""
@@ -553,9 +555,8 @@ class StudyConfig:
 
     def _validate_methods(self) -> None:
         """Each method is a valid policy, named once, with settings no other method has (one train key each);
-        a given checkpoint is named once per observation, and LeRobot's observation needs Meta-World tasks."""
-        for method in self.trained_methods():
-            check_policy(method)
+        a given checkpoint is named once per observation, and LeRobot's observation needs Meta-World tasks.
+        (Their policy settings are checked last, by ``validate``.)"""
         if any(m.obs == LEROBOT_METAWORLD_OBS for m in self.methods):
             for task in self.tasks:
                 check_lerobot_task(get_task(task))  # "the pick family has no LeRobot counterpart"
