@@ -54,6 +54,7 @@ PUBLISHED = {
     "f1_bin-picking_seed1": ROOT / "docs" / "findings.md",
     "f7_object_texture_images": ROOT / "docs" / "findings.md",
     "f7_object_texture_colours": ROOT / "docs" / "findings.md",
+    "f7_object_texture_168px": ROOT / "docs" / "findings.md",
     "bp60_cap200": ROOT / "docs" / "findings.md",
     "bp60_cap500": ROOT / "docs" / "findings.md",
     "bp45_cap500": ROOT / "docs" / "findings.md",
