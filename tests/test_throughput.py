@@ -18,7 +18,7 @@ from lerobot_factorworld.core.timing import Timings
 from lerobot_factorworld.study.config import StudyConfig
 from lerobot_factorworld.study.executors import can_fork, lend_idle_workers, task_units
 from lerobot_factorworld.study.plan import make_plan
-from lerobot_factorworld.study.steps import as_lerobot_process
+from lerobot_factorworld.study.steps import as_lerobot_process, loader_args, stores_video
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -84,6 +84,23 @@ def test_idle_workers_are_lent_to_a_collection_or_a_lone_training_without_changi
     assert lent[0][0].run.get("loader_workers", 0) == 0 and lent[1][0].run["workers"] == 2
     assert lend_idle_workers([[trains[0]], [trains[1]]], 2) == [[trains[0]], [trains[1]]]  # nothing idle
     assert task_units(collects[:1], 3, grouped=False)[0][0].run.get("workers", 1) == 1  # per_step: as planned
+
+
+def test_a_lent_loader_forks_fresh_workers_each_epoch_and_only_for_png_frames(tmp_path):
+    """The flags that keep a lent loader's checkpoint byte-identical (persistent workers would draw torch's RNG
+    differently), and no loader at all for video datasets, whose decoders LeRobot calls unsafe to fork."""
+    assert loader_args(0) == ["--num_workers=0"]
+    assert loader_args(1) == [
+        "--num_workers=1",
+        "--persistent_workers=false",
+        "--dataloader_multiprocessing_context=fork",
+    ]
+    for dtype, video in (("image", False), ("video", True)):
+        root = tmp_path / dtype
+        (root / "meta").mkdir(parents=True)
+        features = {"observation.images.front": {"dtype": dtype}, "action": {"dtype": "float32"}}
+        (root / "meta" / "info.json").write_text(json.dumps({"features": features}))
+        assert stores_video(root) is video
 
 
 def test_a_process_with_another_thread_is_not_forked():
