@@ -388,6 +388,9 @@ def _run_train(step: Step, folder: Path, deps: list[Path]) -> dict[str, Any]:
     if len(datasets) > 1:
         with timings.span("merge"):
             data = _merged_training_data(datasets, folder, step.key)
+    loaders = step.run.get("loader_workers", 0)
+    if loaders and stores_video(Path(data["root"])):  # a lent loader reads PNG frames only (loader_args)
+        loaders = 0
     out = folder / TRAIN_DIR
     if out.exists():  # an interrupted run: LeRobot refuses an existing output_dir, start over
         shutil.rmtree(out)
@@ -403,7 +406,7 @@ def _run_train(step: Step, folder: Path, deps: list[Path]) -> dict[str, Any]:
         f"--steps={steps}",
         f"--batch_size={inputs.batch_size}",
         f"--seed={inputs.seed}",
-        *loader_args(step.run.get("loader_workers", 0) if not stores_video(Path(data["root"])) else 0),
+        *loader_args(loaders),
         f"--save_freq={steps}",
         f"--log_freq={max(1, steps // 10)}",
         "--wandb.enable=false",
