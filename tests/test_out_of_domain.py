@@ -6,9 +6,12 @@ from __future__ import annotations
 import pytest
 
 from lerobot_factorworld.datasets.merge import features_mismatch, merge_datasets
-from lerobot_factorworld.study.config import MethodConfig, StudyConfig
+from lerobot_factorworld.study.config import MethodConfig, StudyConfig, TrainSettings
 from lerobot_factorworld.study.cost import load_model, step_cost
+from lerobot_factorworld.study.inputs import TrainInputs
 from lerobot_factorworld.study.plan import make_plan
+from lerobot_factorworld.study.steps import epoch_frames, train_steps
+from lerobot_factorworld.tasks import get_task
 
 BC = {"name": "bc", "policy": {"type": "bc"}}
 OOD = {"name": "bc_ood", "policy": {"type": "bc"}, "extra_tasks": ["pick-place", "door-open"]}
@@ -58,6 +61,40 @@ def test_extra_demos_make_their_own_dataset_and_bad_settings_are_refused():
     with pytest.raises(ValueError, match="have the same policy settings .* and training data"):
         _cfg(methods=[OOD, {**OOD, "name": "bc_ood_again"}])
     assert len(make_plan(_cfg(methods=[BC, OOD])).of_kind("train")) == 4  # same policy, other data: two methods
+
+
+def test_epochs_over_merged_data_keeps_in_task_passes_and_scales_the_gradient_steps():
+    """``epochs_over: merged``: each own frame is seen as often as without extra tasks (F8's pick-place got 13 of
+    60 passes at equal steps), in more steps; the default's keys are unchanged, and bad settings are refused."""
+    merged = {**OOD, "name": "bc_ood_merged", "epochs_over": "merged"}
+    cfg = _cfg(methods=[BC, OOD, merged], train=TrainSettings(epochs=60, batch_size=32))
+    plan = make_plan(cfg)
+    trains = {(s.meta["method"], s.meta["task"]): s for s in plan.of_kind("train")}
+    assert "epochs_over" not in trains["bc_ood", "pick-place"].inputs  # the default: earlier studies' keys
+    assert trains["bc_ood_merged", "pick-place"].inputs == {
+        **trains["bc_ood", "pick-place"].inputs,
+        "epochs_over": "merged",
+    }
+    assert trains["bc_ood_merged", "pick-place"].deps == trains["bc_ood", "pick-place"].deps
+    inputs = {m: TrainInputs.from_dict(trains[m, "pick-place"].inputs) for m in ("bc_ood", "bc_ood_merged")}
+    own, other = 5018, 8167  # pick-place's and door-open's frames in F8's cell (seed 0)
+    assert train_steps(inputs["bc_ood"], epoch_frames(inputs["bc_ood"], [own, other])) == 9409  # F8's steps
+    assert (
+        train_steps(inputs["bc_ood_merged"], epoch_frames(inputs["bc_ood_merged"], [own, other])) == 24722
+    )  # ceil(60 * 13185 / 32)
+    index = {s.key: s for s in plan.steps}
+    cost = {m: step_cost(trains[m, "pick-place"], index, load_model())[1] for m in ("bc", "bc_ood", "bc_ood_merged")}
+    demo = {t: get_task(t).demo_steps for t in ("pick-place", "door-open")}
+    assert cost["bc_ood"] == cost["bc"]
+    assert cost["bc_ood_merged"] == pytest.approx(
+        cost["bc"] * (demo["pick-place"] + demo["door-open"]) / demo["pick-place"]
+    )
+    with pytest.raises(ValueError, match="unknown epochs_over 'all'; valid: task, merged"):
+        _method({**OOD, "epochs_over": "all"})
+    with pytest.raises(ValueError, match="epochs_over=merged counts epochs over merged data: it needs extra_tasks"):
+        _method({**BC, "epochs_over": "merged"})
+    with pytest.raises(ValueError, match="set train.epochs instead of train.steps"):
+        _cfg(methods=[merged], train=TrainSettings(steps=100))
 
 
 def test_merged_training_data_holds_every_source_and_is_made_once(tiny_dataset, tmp_path):

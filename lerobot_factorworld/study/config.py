@@ -28,6 +28,7 @@ from ..protocol.conditions import PAIR_SEPARATOR, condition_name, parse_shift
 from ..protocol.sampling import DEFAULT_RGB_FRACTION, SamplingOptions
 from ..tasks import get_task
 from .checkpoint import checkpoint_setting
+from .inputs import EPOCHS_OVER
 from .reuse import check_reuse_from
 from .steps import EXECUTIONS  # how steps run, never what they compute
 
@@ -133,6 +134,11 @@ class MethodConfig:
             changes. Meta-World tasks only (the datasets must share their features).
         extra_demos: Demos of each extra task (``None``: ``collect.demos`` for it, so the datasets are the ones
             those tasks' own cells use, collected once).
+        epochs_over: With ``extra_tasks``, what ``train.epochs`` counts: ``task`` (the default) the task's own
+            frames, so the gradient steps are those without extra tasks and each own frame is seen fewer times;
+            ``merged`` every frame of the merged data, so each own frame is seen as often as without extra tasks,
+            in proportionally more gradient steps (F8 in docs/findings.md: at equal steps pick-place's own data got
+            13 of the recipe's 60 passes).
     """
 
     name: str = "rt1_small"
@@ -141,9 +147,18 @@ class MethodConfig:
     obs: str = FACTORWORLD_OBS
     extra_tasks: list[str] = field(default_factory=list)
     extra_demos: int | None = None
+    epochs_over: str = EPOCHS_OVER[0]
 
     def __post_init__(self) -> None:
         check_obs_mode(self.obs)
+        if self.epochs_over not in EPOCHS_OVER:
+            raise ValueError(
+                f"method {self.name!r}: unknown epochs_over {self.epochs_over!r}; valid: {', '.join(EPOCHS_OVER)}"
+            )
+        if self.epochs_over != EPOCHS_OVER[0] and not self.extra_tasks:
+            raise ValueError(
+                f"method {self.name!r}: epochs_over={self.epochs_over} counts epochs over merged data: it needs extra_tasks"
+            )
         if self.checkpoint is not None and (self.extra_tasks or self.extra_demos is not None):
             raise ValueError(
                 f"method {self.name!r}: extra_tasks / extra_demos add training data; a given checkpoint is not trained"
@@ -567,9 +582,15 @@ class StudyConfig:
         for method in self.trained_methods():
             for task in self.tasks if method.extra_tasks else ():
                 check_extra_task(method.name, task, "with extra_tasks, task")
+            if method.epochs_over != EPOCHS_OVER[0] and self.train.epochs is None:
+                raise ValueError(
+                    f"method {method.name!r}: epochs_over={method.epochs_over} says what train.epochs counts; "
+                    "set train.epochs instead of train.steps"
+                )
         seen: dict[str, str] = {}
         for method in self.trained_methods():
             data = {"extra_tasks": sorted(method.extra_tasks), "extra_demos": method.extra_demos}
+            data["epochs_over"] = method.epochs_over
             settings = json.dumps({"policy": method.policy, **data}, sort_keys=True)
             if settings in seen:
                 raise ValueError(

@@ -42,7 +42,7 @@ from .plan import Plan
 from .power import power_lines
 from .profile import finished_timings, last_run
 from .reuse import reusable_steps
-from .steps import KINDS, TIMINGS, Step, evaluated, is_done
+from .steps import KINDS, TIMINGS, Step, epoch_frames, evaluated, is_done
 
 COST_MODEL_FILE = Path(__file__).with_name("cost_model.json")
 # Measured separately (not refitted from a study's timings): a frozen pretrained encoder of bc adds one
@@ -116,23 +116,24 @@ def step_cost(step: Step, plan_index: dict[str, Step], model: dict[str, Any]) ->
     if step.kind == "eval" and not step.deps:  # a given checkpoint: its config says which policy it is
         inputs = EvalInputs.from_dict(step.inputs)
         return _eval_cost(inputs, given_policy(step), inputs.environments, model)
-    if step.kind == "train":  # its steps count the task's own frames (deps[0]), whatever other tasks add
-        collect = CollectInputs.from_dict(plan_index[step.deps[0]].inputs)
-        return model["train"]["fixed_s"], _train_seconds(TrainInputs.from_dict(step.inputs), collect, model)
+    if step.kind == "train":  # the task's own dataset first (deps[0]), then other tasks' (extra_tasks)
+        collects = [CollectInputs.from_dict(plan_index[d].inputs) for d in step.deps]
+        return model["train"]["fixed_s"], _train_seconds(TrainInputs.from_dict(step.inputs), collects, model)
     collect = CollectInputs.from_dict(plan_index[step.deps[-1]].inputs)
     train = TrainInputs.from_dict(plan_index[step.deps[0]].inputs)
     return _eval_cost(EvalInputs.from_dict(step.inputs), train.policy, collect, model)
 
 
-def _train_seconds(train: TrainInputs, collect: CollectInputs, model: dict[str, Any]) -> float:
-    frames = collect.demos * expert_episode_steps(collect.task)
-    steps = train.steps or train.epochs * frames / train.batch_size
+def _train_seconds(train: TrainInputs, collects: list[CollectInputs], model: dict[str, Any]) -> float:
+    """Seconds of a training's work on ``collects`` (the task's own dataset first, then other tasks' merged in)."""
+    frames = [c.demos * expert_episode_steps(c.task) for c in collects]
+    steps = train.steps or train.epochs * epoch_frames(train, frames) / train.batch_size
     samples = steps * train.batch_size
     policy = train.policy
     seconds = samples * model["train"]["sample_s"].get(policy["type"], DEFAULT_SAMPLE_S)
     encoder = frozen_encoder(policy)
     if encoder:
-        seconds += encoder_runs(policy, frames, samples) * cameras_of(collect) * ENCODER_FRAME_S[encoder]
+        seconds += encoder_runs(policy, sum(frames), samples) * cameras_of(collects[0]) * ENCODER_FRAME_S[encoder]
     return seconds
 
 

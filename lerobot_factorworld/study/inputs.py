@@ -132,11 +132,16 @@ class EnvInputs:
         )
 
 
+# What ``train.epochs`` counts when other tasks' data joins a task's (``MethodConfig.epochs_over``): the task's own
+# frames (the default, left out of the key) or every frame of the merged data.
+EPOCHS_OVER = ("task", "merged")
+
+
 @dataclass(frozen=True)
 class TrainInputs:
     """One ``lerobot-train`` run of a method on a dataset."""
 
-    OPTIONAL: ClassVar[frozenset[str]] = frozenset()
+    OPTIONAL: ClassVar[frozenset[str]] = frozenset({"epochs_over"})
 
     policy: Mapping[str, Any]  # path-like settings naming a file replaced by its content hash
     seed: int
@@ -147,11 +152,12 @@ class TrainInputs:
     device: str
     extra_args: tuple[str, ...]
     versions: Mapping[str, str]
+    epochs_over: str | None = None  # "merged", or None (the task's own frames; not in the key)
 
     def to_dict(self) -> dict[str, Any]:
         out = {f.name: getattr(self, f.name) for f in fields(self)}
         out.update(policy=dict(self.policy), extra_args=list(self.extra_args), versions=dict(self.versions))
-        return out
+        return {k: v for k, v in out.items() if k not in self.OPTIONAL or v is not None}
 
     @classmethod
     def from_dict(cls, data: Mapping[str, Any]) -> TrainInputs:

@@ -34,6 +34,7 @@ from .aggregate import (
     summary,
 )
 from .config import StudyConfig
+from .inputs import EPOCHS_OVER
 from .metrics import BOOTSTRAP_RESAMPLES, BOOTSTRAP_SEED, rank_hardest_first, rerank, spearman
 from .paper import (
     PAPER_FACTOR_GROUPS,
@@ -173,7 +174,12 @@ def _extra_data_lines(cfg: StudyConfig) -> list[str]:
             lines.append(
                 f"- Out-of-domain data: {m.name} trains on each task's dataset plus the datasets of "
                 f"{', '.join(m.extra_tasks)} (other than the task itself) in the same cell, {demos}; its in-task "
-                "demos and gradient steps are those of the same method without them."
+                + (
+                    "demos and passes over them are those of the same method without them (its epochs count every "
+                    "merged frame, so it takes proportionally more gradient steps)."
+                    if m.epochs_over == EPOCHS_OVER[1]
+                    else "demos and gradient steps are those of the same method without them."
+                )
             )
     return lines
 

@@ -16,7 +16,7 @@ from ..factors.registry import get_factor
 from ..protocol.conditions import TRAIN_SUITE
 from .checkpoint import GIVEN_CHECKPOINT, keyed_checkpoint
 from .config import RADII_M, MethodConfig, StudyConfig, map_arg_paths, map_policy_paths
-from .inputs import CollectInputs, EnvInputs, EvalInputs, TrainInputs
+from .inputs import EPOCHS_OVER, CollectInputs, EnvInputs, EvalInputs, TrainInputs
 from .steps import RUN, Step, versions
 
 DEFAULT_WIDTHS = "default"
@@ -87,7 +87,8 @@ def _method_steps(
         extras = [
             _extra_collect_step(cfg, method, extra, collect) for extra in method.extra_tasks_for(collect.meta["task"])
         ]
-        train = _train_step(cfg, method.policy, seed, collect, labels, extras)
+        epochs_over = method.epochs_over if extras and method.epochs_over != EPOCHS_OVER[0] else None
+        train = _train_step(cfg, method.policy, seed, collect, labels, extras, epochs_over)
         return [*extras, train, *(_eval_step(cfg, c, train, collect, labels) for c in conditions)]
     if seed != cfg.seeds[0]:
         return []
@@ -131,10 +132,17 @@ def _extra_collect_step(cfg: StudyConfig, method: MethodConfig, task: str, colle
 
 
 def _train_step(
-    cfg: StudyConfig, policy: dict[str, Any], seed: int, collect: Step, labels: dict, extras: list[Step]
+    cfg: StudyConfig,
+    policy: dict[str, Any],
+    seed: int,
+    collect: Step,
+    labels: dict,
+    extras: list[Step],
+    epochs_over: str | None = None,
 ) -> Step:
     """Training of one method on one dataset (with ``extras``: merged with other tasks' datasets; the task's
-    own comes first in ``deps``); weight files enter the key by content, not by location."""
+    own comes first in ``deps``, and ``epochs_over`` says what an epoch counts); weight files enter the key by
+    content, not by location."""
     t = cfg.train
     inputs = TrainInputs(
         policy=keyed_policy(policy),
@@ -146,6 +154,7 @@ def _train_step(
         device=t.device,
         extra_args=tuple(keyed_args(t.extra_args)),
         versions=versions(),
+        epochs_over=epochs_over,
     )
     run = {"policy": policy, "extra_args": list(t.extra_args)}
     return Step("train", inputs.to_dict(), (collect.key, *(e.key for e in extras)), {**labels, RUN: run})

@@ -45,7 +45,7 @@ from ..protocol.conditions import fingerprint
 from ..protocol.coverage import coverage
 from .checkpoint import GIVEN_CHECKPOINT, checkpoint_folder
 from .eval_env import eval_env_config
-from .inputs import CollectInputs, EvalInputs, TrainInputs
+from .inputs import EPOCHS_OVER, CollectInputs, EvalInputs, TrainInputs
 
 KINDS = ("collect", "train", "eval")
 STEP_FORMAT = 2  # bump when a step's meaning changes: every key changes with it (2: versions, content hashes)
@@ -377,6 +377,12 @@ def train_steps(inputs: TrainInputs, frames: int) -> int:
     return max(1, math.ceil(inputs.epochs * frames / inputs.batch_size))
 
 
+def epoch_frames(inputs: TrainInputs, frames: list[int]) -> int:
+    """The frames an epoch counts, from each dataset's (the task's own first): its own (``epochs_over`` unset:
+    other tasks' data changes the mix, not the steps), or all of them (``merged``)."""
+    return sum(frames) if inputs.epochs_over == EPOCHS_OVER[1] else frames[0]
+
+
 def _run_train(step: Step, folder: Path, deps: list[Path]) -> dict[str, Any]:
     timings, execution = _current()
     datasets = [read_result(d) for d in deps if d.parent.name == "collect"]  # the task's own first
@@ -384,7 +390,7 @@ def _run_train(step: Step, folder: Path, deps: list[Path]) -> dict[str, Any]:
     inputs = TrainInputs.from_dict(step.inputs)
     policy = step.run.get("policy", inputs.policy)  # absolute paths; the key holds their content hashes
     extra_args = step.run.get("extra_args", list(inputs.extra_args))
-    steps = train_steps(inputs, data["frames"])  # other tasks' data (extra_tasks) changes the mix, not the steps
+    steps = train_steps(inputs, epoch_frames(inputs, [d["frames"] for d in datasets]))
     if len(datasets) > 1:
         with timings.span("merge"):
             data = _merged_training_data(datasets, folder, step.key)
