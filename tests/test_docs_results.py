@@ -45,6 +45,7 @@ PUBLISHED = {
     "pick": ROOT / "docs" / "pick.md",
     "f1_ordering": ROOT / "docs" / "findings.md",
     "f8_out_of_domain": ROOT / "docs" / "findings.md",
+    "f8_out_of_domain_language_seed0": ROOT / "docs" / "findings.md",
     "f4_radius": ROOT / "docs" / "findings.md",
     "f1_pick-place_seed0": ROOT / "docs" / "findings.md",
     "f9_pick": ROOT / "docs" / "findings.md",
