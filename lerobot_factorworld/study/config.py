@@ -28,7 +28,7 @@ from ..protocol.conditions import PAIR_SEPARATOR, condition_name, parse_shift
 from ..protocol.sampling import DEFAULT_RGB_FRACTION, SamplingOptions
 from ..tasks import get_task
 from .checkpoint import checkpoint_setting
-from .inputs import EPOCHS_OVER
+from .inputs import EPOCHS_OVER, OWN_FRAMES
 from .reuse import check_reuse_from
 from .steps import EXECUTIONS  # how steps run, never what they compute
 
@@ -147,7 +147,7 @@ class MethodConfig:
     obs: str = FACTORWORLD_OBS
     extra_tasks: list[str] = field(default_factory=list)
     extra_demos: int | None = None
-    epochs_over: str = EPOCHS_OVER[0]
+    epochs_over: str = OWN_FRAMES
 
     def __post_init__(self) -> None:
         check_obs_mode(self.obs)
@@ -155,7 +155,7 @@ class MethodConfig:
             raise ValueError(
                 f"method {self.name!r}: unknown epochs_over {self.epochs_over!r}; valid: {', '.join(EPOCHS_OVER)}"
             )
-        if self.epochs_over != EPOCHS_OVER[0] and not self.extra_tasks:
+        if self.epochs_over != OWN_FRAMES and not self.extra_tasks:
             raise ValueError(
                 f"method {self.name!r}: epochs_over={self.epochs_over} counts epochs over merged data: it needs extra_tasks"
             )
@@ -582,7 +582,7 @@ class StudyConfig:
         for method in self.trained_methods():
             for task in self.tasks if method.extra_tasks else ():
                 check_extra_task(method.name, task, "with extra_tasks, task")
-            if method.epochs_over != EPOCHS_OVER[0] and self.train.epochs is None:
+            if method.epochs_over != OWN_FRAMES and self.train.epochs is None:
                 raise ValueError(
                     f"method {method.name!r}: epochs_over={method.epochs_over} says what train.epochs counts; "
                     "set train.epochs instead of train.steps"

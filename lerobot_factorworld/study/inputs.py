@@ -134,7 +134,8 @@ class EnvInputs:
 
 # What ``train.epochs`` counts when other tasks' data joins a task's (``MethodConfig.epochs_over``): the task's own
 # frames (the default, left out of the key) or every frame of the merged data.
-EPOCHS_OVER = ("task", "merged")
+OWN_FRAMES, MERGED_FRAMES = "task", "merged"
+EPOCHS_OVER = (OWN_FRAMES, MERGED_FRAMES)
 
 
 @dataclass(frozen=True)

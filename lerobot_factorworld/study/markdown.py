@@ -34,7 +34,7 @@ from .aggregate import (
     summary,
 )
 from .config import StudyConfig
-from .inputs import EPOCHS_OVER
+from .inputs import MERGED_FRAMES
 from .metrics import BOOTSTRAP_RESAMPLES, BOOTSTRAP_SEED, rank_hardest_first, rerank, spearman
 from .paper import (
     PAPER_FACTOR_GROUPS,
@@ -177,7 +177,7 @@ def _extra_data_lines(cfg: StudyConfig) -> list[str]:
                 + (
                     "demos and passes over them are those of the same method without them (its epochs count every "
                     "merged frame, so it takes proportionally more gradient steps)."
-                    if m.epochs_over == EPOCHS_OVER[1]
+                    if m.epochs_over == MERGED_FRAMES
                     else "demos and gradient steps are those of the same method without them."
                 )
             )

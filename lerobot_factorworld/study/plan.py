@@ -16,7 +16,7 @@ from ..factors.registry import get_factor
 from ..protocol.conditions import TRAIN_SUITE
 from .checkpoint import GIVEN_CHECKPOINT, keyed_checkpoint
 from .config import RADII_M, MethodConfig, StudyConfig, map_arg_paths, map_policy_paths
-from .inputs import EPOCHS_OVER, CollectInputs, EnvInputs, EvalInputs, TrainInputs
+from .inputs import OWN_FRAMES, CollectInputs, EnvInputs, EvalInputs, TrainInputs
 from .steps import RUN, Step, versions
 
 DEFAULT_WIDTHS = "default"
@@ -87,7 +87,7 @@ def _method_steps(
         extras = [
             _extra_collect_step(cfg, method, extra, collect) for extra in method.extra_tasks_for(collect.meta["task"])
         ]
-        epochs_over = method.epochs_over if extras and method.epochs_over != EPOCHS_OVER[0] else None
+        epochs_over = method.epochs_over if extras and method.epochs_over != OWN_FRAMES else None
         train = _train_step(cfg, method.policy, seed, collect, labels, extras, epochs_over)
         return [*extras, train, *(_eval_step(cfg, c, train, collect, labels) for c in conditions)]
     if seed != cfg.seeds[0]:

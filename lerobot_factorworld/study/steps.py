@@ -45,7 +45,7 @@ from ..protocol.conditions import fingerprint
 from ..protocol.coverage import coverage
 from .checkpoint import GIVEN_CHECKPOINT, checkpoint_folder
 from .eval_env import eval_env_config
-from .inputs import EPOCHS_OVER, CollectInputs, EvalInputs, TrainInputs
+from .inputs import MERGED_FRAMES, CollectInputs, EvalInputs, TrainInputs
 
 KINDS = ("collect", "train", "eval")
 STEP_FORMAT = 2  # bump when a step's meaning changes: every key changes with it (2: versions, content hashes)
@@ -380,7 +380,7 @@ def train_steps(inputs: TrainInputs, frames: int) -> int:
 def epoch_frames(inputs: TrainInputs, frames: list[int]) -> int:
     """The frames an epoch counts, from each dataset's (the task's own first): its own (``epochs_over`` unset:
     other tasks' data changes the mix, not the steps), or all of them (``merged``)."""
-    return sum(frames) if inputs.epochs_over == EPOCHS_OVER[1] else frames[0]
+    return sum(frames) if inputs.epochs_over == MERGED_FRAMES else frames[0]
 
 
 def _run_train(step: Step, folder: Path, deps: list[Path]) -> dict[str, Any]:
