@@ -16,7 +16,7 @@ $(STAMP): pyproject.toml scripts/setup.sh
 demo: setup
 	MUJOCO_GL=egl $(BIN)/factorworld study --config configs/study/quick.yaml
 
-# Every finding of docs/findings.md, each reusing the steps of those before it: at most 19-21 hours on 2 cores,
+# Every finding of docs/findings.md, each reusing the steps of those before it: at most 22-25 hours on 2 cores,
 # resumable (run it again to go on). DRY_RUN=1 prints each one's cost and power; ONLY="f3_pairs ..." some.
 findings: setup
 	bash scripts/run_findings.sh

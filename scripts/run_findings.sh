@@ -3,7 +3,7 @@
 # before it (`reuse_from`: a step with the same key is the same result, docs/study.md). The order makes the most
 # of that: F3's seed-0 datasets, trainings and single-factor evaluations are also F1's, F5's, F6's and F8's, and
 # F1's N = 5 steps are F2's, F4's and F8's. Resumable: run it again and it goes on where it stopped (finished
-# steps are never redone). At most the configs' own estimates, 19-21 hours on 2 cores, less what reuse saves;
+# steps are never redone). At most the configs' own estimates, 22-25 hours on 2 cores, less what reuse saves;
 # one study at a time uses both cores.
 #   bash scripts/run_findings.sh                              # run all, into outputs/study/findings/<config>/
 #   DRY_RUN=1 bash scripts/run_findings.sh                    # each study's --dry-run (steps, cost, power)
@@ -23,6 +23,7 @@ FINDINGS=(
   f8_out_of_domain_language
   f8_out_of_domain_language_epochs
   f2_gap_vs_n
+  f2_gap_vs_n_400_demos
   f4_radius
   f6_pretrained
   f7_object_texture_images

@@ -606,17 +606,23 @@ def test_study_configs_parse_and_plan(name):
     assert make_plan(_config(name)).counts()["eval"] > 0
 
 
+# Findings that change the amount of data on purpose (the paper's scale), and how many demos they collect.
+DATA_SCALE = {"findings/f2_gap_vs_n_400_demos.yaml": 400}
+
+
 def test_findings_configs_share_one_recipe_and_their_own_folders():
     """Every finding (docs/findings.md) trains with the documented recipe, so findings compare; each writes
-    to its own folder named after it, and the pick protocol (F9) differs only where pick.yaml does."""
+    to its own folder named after it, and the pick protocol (F9) differs only where pick.yaml does. Only the
+    findings listed in ``DATA_SCALE`` collect another number of demos."""
     assert len(FINDINGS) >= 9
     configs = {name: _config(name) for name in FINDINGS}
     recipe = configs["findings/f1_ordering.yaml"]
+    assert set(DATA_SCALE) <= set(configs)
     for name, cfg in configs.items():
         assert cfg.train == recipe.train, name
         assert cfg.out_dir == f"outputs/study/findings/{cfg.name}" and name == f"findings/{cfg.name}.yaml", name
         if cfg.tasks != ["pick"]:
-            assert cfg.collect.demos == recipe.collect.demos, name
+            assert cfg.collect.demos == DATA_SCALE.get(name, recipe.collect.demos), name
             assert cfg.collect.action_noise == recipe.collect.action_noise, name
 
 
