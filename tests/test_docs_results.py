@@ -46,6 +46,7 @@ PUBLISHED = {
     "f1_ordering": ROOT / "docs" / "findings.md",
     "f8_out_of_domain": ROOT / "docs" / "findings.md",
     "f8_out_of_domain_language": ROOT / "docs" / "findings.md",
+    "f8_out_of_domain_language_epochs": ROOT / "docs" / "findings.md",
     "f4_radius": ROOT / "docs" / "findings.md",
     "f1_pick-place_seed0": ROOT / "docs" / "findings.md",
     "f9_pick": ROOT / "docs" / "findings.md",
