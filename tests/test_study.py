@@ -686,3 +686,24 @@ def test_paper_config_is_the_papers_grid():
     widths = {s.meta["widths"] for s in make_plan(cfg).of_kind("collect")}
     assert widths == {"default", "camera_pos=medium", "camera_pos=wide", "table_pos=medium", "table_pos=wide"}
     assert radius_of("camera_pos=wide", "camera_pos") == 0.075 and radius_of("default", "table_pos") == 0.025
+
+
+def test_findings_cost_counts_each_shared_step_once_in_run_findings_order():
+    """scripts/findings_cost.py (docs/findings.md's cost of the whole set) reads run_findings.sh's list, picks one
+    config per finding, and charges a config only for the steps no config before it has: F1 after F3 reuses
+    F3's seed-0 datasets, trainings and single-factor evaluations, so it costs less than alone."""
+    import importlib.util  # a script, loaded by path
+
+    spec = importlib.util.spec_from_file_location("findings_cost", ROOT / "scripts" / "findings_cost.py")
+    script = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(script)
+    names = script.findings_order()
+    assert sorted(names) == sorted(Path(name).stem for name in FINDINGS)
+    firsts = script.first_of_each_finding(names)
+    assert [name.split("_")[0] for name in sorted(firsts)] == [f"f{i}" for i in range(1, 10)]
+    assert "f8_out_of_domain" in firsts and "f8_out_of_domain_language" not in firsts
+    (_, f3_alone, f3_new, f3_total, f3_hours), (_, f1_alone, f1_new, f1_total, f1_hours) = script.costs(
+        ["f3_pairs", "f1_ordering"]
+    )
+    assert f3_new == f3_total and f3_hours == pytest.approx(f3_alone)
+    assert 0 < f1_new < f1_total and 0 < f1_hours < f1_alone
