@@ -6,7 +6,7 @@ with the same key is the same result: F3's seed-0 datasets and trainings are F1'
 config listed there, in that order, and estimates with the study's cost model (``study/cost.py``, 2 cores) each
 one's steps that no config before it has: the set's cost with shared steps counted once. It also totals the set
 of each finding's first config (F1 to F9, one each: what issue 19 sized at about 12 hours), the others being
-follow-ups that test an explanation. Plans only: nothing runs, nothing is read from disk but the configs.
+follow-ups that test an explanation. Plans only: nothing runs; it reads the configs and the cost model.
 
     .venv/bin/python scripts/findings_cost.py            # a Markdown table, then the two totals
 
