@@ -24,7 +24,7 @@ from pathlib import Path
 from lerobot_factorworld.core.settings import parse_config
 from lerobot_factorworld.study import cost
 from lerobot_factorworld.study.config import StudyConfig
-from lerobot_factorworld.study.plan import make_plan
+from lerobot_factorworld.study.plan import Plan, make_plan
 
 REPO_ROOT = Path(__file__).resolve().parents[1]
 RUN_FINDINGS = REPO_ROOT / "scripts" / "run_findings.sh"
@@ -48,13 +48,20 @@ def first_of_each_finding(names: list[str]) -> list[str]:
     return list(firsts.values())
 
 
-def costs(names: list[str]) -> list[tuple[str, float, int, int, float]]:
+def plan_configs(names: list[str]) -> dict[str, Plan]:
+    """Each config's plan, made once (the totals below reuse them)."""
+    return {
+        name: make_plan(parse_config(StudyConfig, [f"--config_path={CONFIGS / name}.yaml"], "study")) for name in names
+    }
+
+
+def costs(names: list[str], plans: dict[str, Plan] | None = None) -> list[tuple[str, float, int, int, float]]:
     """Per config, in order: (name, hours alone, its steps no config before it has, its steps, their hours)."""
+    plans = plans or plan_configs(names)
     seen: set[str] = set()
     rows = []
     for name in names:
-        cfg = parse_config(StudyConfig, [f"--config_path={CONFIGS / name}.yaml"], "study")
-        plan = make_plan(cfg)
+        plan = plans[name]
         new = [step for step in plan.steps if step.key not in seen]
         alone = cost.estimate(plan, list(plan.steps))[PROFILE]
         rows.append((name, alone, len(new), len(plan.steps), cost.estimate(plan, new)[PROFILE] if new else 0.0))
@@ -64,14 +71,14 @@ def costs(names: list[str]) -> list[tuple[str, float, int, int, float]]:
 
 def main() -> None:
     names = findings_order()
-    rows = costs(names)
+    plans = plan_configs(names)
+    rows = costs(names, plans)
     print("| config | alone (h) | steps not run before it | with reuse (h) |\n|---|---|---|---|")
     for name, alone, new, total, hours in rows:
         print(f"| {name} | {alone:.2f} | {new} of {total} | {hours:.2f} |")
-    firsts = set(first_of_each_finding(names))
     every = sum(row[4] for row in rows)
     print(f"\nall {len(rows)} configs: {sum(row[1] for row in rows):.1f} h alone, {every:.1f} h with shared steps once")
-    core = costs([name for name in names if name in firsts])
+    core = costs(first_of_each_finding(names), plans)
     print(f"the first config of each finding ({len(core)}): {sum(row[1] for row in core):.1f} h alone, "
           f"{sum(row[4] for row in core):.1f} h with shared steps once")  # fmt: skip
 
