@@ -63,6 +63,7 @@ PUBLISHED = {
     "f2_gap_vs_n_pick-place": ROOT / "docs" / "findings.md",
     "f2_gap_vs_n_door-open": ROOT / "docs" / "findings.md",
     "f2_gap_vs_n_400_demos": ROOT / "docs" / "findings.md",
+    "f2_gap_vs_n_400_demos_n5_20": ROOT / "docs" / "findings.md",
     "f6_pretrained": ROOT / "docs" / "findings.md",
 }  # committed studies and a page that must quote them
 
