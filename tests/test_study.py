@@ -3,6 +3,7 @@
 dataset), and a toy study end to end (collect, train, evaluate, report), cached, resumed, and on Ray."""
 
 import filecmp
+import json
 import logging
 import math
 import os
@@ -520,11 +521,13 @@ def test_a_plan_on_a_local_ray_instance_gives_the_same_results(toy, tmp_path):
 def test_a_study_reuses_another_studys_finished_steps_by_key(toy, tmp_path):
     """N = 1 of the toy with camera position instead of table texture, reusing the toy's folder: its collection,
     training and the two evaluations it shares are linked (the same rows), only the two new ones run, and
-    nothing in the toy's folder changes."""
+    nothing in the toy's folder changes; its published config leaves the reused folders out, and a report
+    regenerates where they do not exist."""
     import csv
 
     from lerobot_factorworld.study.cost import describe
     from lerobot_factorworld.study.plan import make_plan
+    from lerobot_factorworld.study.report import regenerate_report
     from lerobot_factorworld.study.runner import run_study
 
     cfg, first = toy
@@ -548,6 +551,11 @@ def test_a_study_reuses_another_studys_finished_steps_by_key(toy, tmp_path):
     ]
     assert len(linked) == 4 and all(p.is_symlink() for p in linked)
     assert sorted(p.relative_to(cfg.out_dir) for p in Path(cfg.out_dir, "steps").rglob("*")) == toy_steps
+    published, _ = regenerate_report(outcome.results, out=tmp_path / "published")
+    config = published.parent / "config.yaml"  # reuse_from names this machine's folders: left out
+    assert json.loads(config.read_text())["reuse_from"] == []
+    config.write_text(config.read_text().replace('"reuse_from": []', f'"reuse_from": ["{tmp_path}/gone"]'))
+    assert regenerate_report(published.parent / "results.csv")[0].read_text() == published.read_text()
     with pytest.raises(ValueError, match="is this study's own folder"):
         replace(reuser, reuse_from=[reuser.out_dir])
     with pytest.raises(ValueError, match=f"reuse_from: {tmp_path} is not a study folder"):

@@ -14,9 +14,12 @@ One renderer, two ways in, so a documented number can always be recomputed from 
 
 from __future__ import annotations
 
+import json
 import shutil
 from collections.abc import Sequence
 from pathlib import Path
+
+import yaml
 
 from ..core.io import atomic_write_text
 from ..core.settings import parse_config
@@ -32,6 +35,7 @@ from .steps import STEPS_DIR
 
 PUBLISHED_CONFIG = "config.yaml"  # the study's config, committed next to its results.csv (docs/results/<study>/)
 REPORT_COMMAND = "report"  # factorworld report
+REUSE_SETTING = "reuse_from"  # StudyConfig's other studies' folders: how a study ran, left out of a published config
 NO_TIMINGS = (
     "*Where the time went* is left out: it comes from the per-step timings in the study's step folders, "
     f"which a report regenerated from `{RESULTS_FILE}` does not read."
@@ -109,7 +113,7 @@ def regenerate_report(
     if (results.parent / EPISODES_FILE).is_file():  # not read by the report, but part of the results
         _copy(results.parent / EPISODES_FILE, out / EPISODES_FILE)
     if not (out / RUN_CONFIG_FILE).is_file() or config.resolve() != (out / RUN_CONFIG_FILE).resolve():
-        _copy(config, out / PUBLISHED_CONFIG)
+        _publish_config(config, out / PUBLISHED_CONFIG)
     for family in families_of(cfg):
         for name in family.report_files:
             if (results.parent / name).is_file():
@@ -132,8 +136,12 @@ def _config_next_to(results: Path) -> Path:
 
 
 def load_config(path: str | Path) -> StudyConfig:
-    """The study config a ``results.csv`` was made with (a YAML file as ``factorworld study`` reads it)."""
-    return parse_config(StudyConfig, [f"--config_path={path}"], "study")
+    """The study config a ``results.csv`` was made with (a YAML file as ``factorworld study`` reads it).
+
+    Its ``reuse_from`` is left out: where finished steps were linked from is how a study ran on one machine,
+    not what it computed (a step's key is its inputs), and those folders need not exist where a report is
+    regenerated."""
+    return parse_config(StudyConfig, [f"--config_path={path}", f"--{REUSE_SETTING}=[]"], "study")
 
 
 def check_study_name(rows: Sequence[dict], name: str, results: Path) -> None:
@@ -159,6 +167,17 @@ def check_rows_planned(rows: Sequence[dict], plan: Plan, results: Path, config: 
 def _cell(labels: dict) -> tuple:
     keys = ("method", "task", "n_train_envs", "seed", "widths", "condition")
     return tuple(str(labels[k]) for k in keys)
+
+
+def _publish_config(source: Path, target: Path) -> None:
+    """Copy the study's config next to its results, without the machine-local ``reuse_from`` folders
+    (:func:`load_config`): verbatim, comments included, when it names none; else rewritten as JSON (which
+    is YAML) with an empty list."""
+    settings = yaml.safe_load(source.read_text())
+    if isinstance(settings, dict) and settings.get(REUSE_SETTING):
+        atomic_write_text(target, json.dumps({**settings, REUSE_SETTING: []}, indent=1, sort_keys=True))
+    else:
+        _copy(source, target)
 
 
 def _copy(source: Path, target: Path) -> None:
