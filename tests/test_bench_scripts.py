@@ -21,6 +21,7 @@ SCRIPTS = Path(__file__).resolve().parents[1] / "scripts"
     [
         pytest.param("bench_env.py", ("Factor World (front, fast)", "Meta-World (corner2, defaults)"), 180, id="env"),
         pytest.param("bench_policy.py", ("| small",), 300, id="policy"),
+        pytest.param("bench_malloc.py", ("| default |", "| keep_freed |", "identical weights"), 180, id="malloc"),
         pytest.param("bench_collect.py", (), 300, id="collect", marks=pytest.mark.slow),
         pytest.param("bench_bc.py", ("| cpu    | bc conv ", "| cpu    | act "), 600, id="bc", marks=pytest.mark.slow),
     ],

@@ -6,9 +6,11 @@ from __future__ import annotations
 import json
 import logging
 import os
+import platform
 import re
 import subprocess
 import sys
+import textwrap
 import time
 from pathlib import Path
 
@@ -151,6 +153,43 @@ def test_profile_and_cost_fit_read_the_steps_timings(tmp_path, monkeypatch):
     # the fitted constants are what the estimate uses (the fake results' frames are not the plan's demos)
     whole = cost.estimate(plan, list(plan.steps), "grouped", written)
     assert whole["one CPU machine (2 cores)"] * 3600 > written["study_s"]
+
+
+KEPT_MEMORY_CHECK = textwrap.dedent(
+    """
+    import ctypes, os
+    from lerobot_factorworld.core import memory
+
+    class MallInfo2(ctypes.Structure):  # glibc's struct mallinfo2: arena (bytes from sbrk) first
+        _fields_ = [(name, ctypes.c_size_t) for name in "arena ordblks smblks hblks hblkhd usmblks fsmblks uordblks fordblks keepcost".split()]
+
+    libc = ctypes.CDLL(None)
+    libc.mallinfo2.restype = MallInfo2
+
+    def freed_memory_kept():  # 8 MiB in 64 KiB blocks (below the mmap threshold), then freed: does the heap shrink?
+        before = libc.mallinfo2().arena
+        blocks = [ctypes.create_string_buffer(64 << 10) for _ in range(128)]
+        del blocks
+        return libc.mallinfo2().arena - before >= 7 << 20
+
+    print("default", freed_memory_kept())
+    print("set", memory.keep_freed_memory())
+    print("again", memory.keep_freed_memory())
+    if (pid := os.fork()) == 0:
+        print("forked child", freed_memory_kept(), flush=True)
+        os._exit(0)
+    os.waitpid(pid, 0)
+    """
+)
+
+
+@pytest.mark.skipif(platform.libc_ver()[0] != "glibc", reason="mallopt's settings are glibc's")
+def test_keeping_freed_memory_is_set_once_and_inherited_by_forked_workers():
+    """glibc's malloc is left alone until a process that runs steps warms up (``grouped``): freed memory goes
+    back to the kernel; then ``mallopt`` takes every setting, and a worker forked from it keeps freed memory."""
+    proc = subprocess.run([sys.executable, "-c", KEPT_MEMORY_CHECK], capture_output=True, text=True)
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    assert proc.stdout.splitlines() == ["default False", "set True", "again True", "forked child True"], proc.stdout
 
 
 def test_bench_study_quick_runs_both_executions_with_identical_results():

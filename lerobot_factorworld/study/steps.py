@@ -37,6 +37,7 @@ from typing import Any
 from .. import __version__  # the package root registers the env and policy types (in a fresh worker too)
 from ..core import provenance
 from ..core.io import atomic_write_text
+from ..core.memory import keep_freed_memory
 from ..core.timing import Timings
 from ..datasets.merge import merge_datasets
 from ..envs.stages import STAGE_KEY
@@ -228,8 +229,11 @@ def _current() -> tuple[Timings, str]:
 def warm_up() -> float:
     """Import what steps import (torch, LeRobot's dataset, training and evaluation stacks, the simulation)
     and return the seconds it took: a ``grouped`` worker does it as soon as the pool starts, all workers at
-    once, instead of each paying it in the middle of its first step (on the study's critical path)."""
+    once, instead of each paying it in the middle of its first step (on the study's critical path). Also keeps
+    freed memory in the process (:func:`~..core.memory.keep_freed_memory`: CPU training updates about 1.25x
+    faster, byte-identical results), which the workers forked from it inherit; ``per_step`` does neither."""
     start = time.perf_counter()
+    keep_freed_memory()
     os.environ.setdefault("MUJOCO_GL", "egl")
     # Deliberately here: these are the heavy imports of a step (seconds), wanted in workers only.
     import lerobot.datasets.lerobot_dataset  # noqa: F401, PLC0415
