@@ -43,3 +43,4 @@ bench: setup
 	$(BIN)/python scripts/bench_collect.py
 	$(BIN)/python scripts/bench_policy.py
 	$(BIN)/python scripts/bench_bc.py
+	$(BIN)/python scripts/bench_malloc.py
