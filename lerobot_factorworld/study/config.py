@@ -353,7 +353,8 @@ class EvalSettings:
             evaluations, and their keys, stay as they are.
         device: Where the policy runs during evaluation (``cpu``, ``cuda``, ``cuda:<index>``, ``mps``);
             in the step's key (GPU kernels need not give the CPU's actions bit for bit).
-        batch_size: Vectorised environments per evaluation (results do not depend on it: not in the key).
+        batch_size: Vectorised environments per evaluation (not in the key; a batch changes the actions'
+            last bits, not the quick study's successes, and is slower on CPU: docs/study.md, Throughput).
         threads: Torch CPU threads per evaluation (not in the key).
     """
 
