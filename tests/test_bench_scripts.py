@@ -6,6 +6,7 @@ No speed thresholds here (this machine is noisy and CI may be slower): the targe
 from __future__ import annotations
 
 import os
+import platform
 import re
 import subprocess
 import sys
@@ -21,7 +22,13 @@ SCRIPTS = Path(__file__).resolve().parents[1] / "scripts"
     [
         pytest.param("bench_env.py", ("Factor World (front, fast)", "Meta-World (corner2, defaults)"), 180, id="env"),
         pytest.param("bench_policy.py", ("| small",), 300, id="policy"),
-        pytest.param("bench_malloc.py", ("| default |", "| keep_freed |", "identical weights"), 180, id="malloc"),
+        pytest.param(
+            "bench_malloc.py",
+            ("| default |", "| keep_freed |", "identical weights"),
+            180,
+            id="malloc",
+            marks=pytest.mark.skipif(platform.libc_ver()[0] != "glibc", reason="mallopt's settings are glibc's"),
+        ),
         pytest.param("bench_collect.py", (), 300, id="collect", marks=pytest.mark.slow),
         pytest.param("bench_bc.py", ("| cpu    | bc conv ", "| cpu    | act "), 600, id="bc", marks=pytest.mark.slow),
     ],

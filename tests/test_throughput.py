@@ -185,8 +185,9 @@ KEPT_MEMORY_CHECK = textwrap.dedent(
 
 @pytest.mark.skipif(platform.libc_ver()[0] != "glibc", reason="mallopt's settings are glibc's")
 def test_keeping_freed_memory_is_set_once_and_inherited_by_forked_workers():
-    """glibc's malloc is left alone until a process that runs steps warms up (``grouped``): freed memory goes
-    back to the kernel; then ``mallopt`` takes every setting, and a worker forked from it keeps freed memory."""
+    """glibc's malloc is left alone until a ``grouped`` worker runs its steps: freed memory goes back to the
+    kernel; then ``mallopt`` takes every setting (once: the second call is cached), and a process forked from
+    it keeps freed memory too."""
     proc = subprocess.run([sys.executable, "-c", KEPT_MEMORY_CHECK], capture_output=True, text=True)
     assert proc.returncode == 0, proc.stderr[-2000:]
     assert proc.stdout.splitlines() == ["default False", "set True", "again True", "forked child True"], proc.stdout

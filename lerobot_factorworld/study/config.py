@@ -20,6 +20,7 @@ from typing import Any
 
 import draccus
 
+from ..core.io import atomic_write_json
 from ..datasets.hub import check_hub_repo_id
 from ..envs.lerobot_obs import FACTORWORLD_OBS, LEROBOT_METAWORLD_OBS, check_lerobot_task, check_obs_mode
 from ..factors.registry import PAPER_STUDY_FACTORS, WIDTHS, check_task_support, get_factor
@@ -377,6 +378,11 @@ class EvalSettings:
 
 
 RUN_CONFIG_FILE = "config.json"  # the settings a study ran with, written into its folder by every run
+
+
+def write_run_config(path: str | Path, settings: dict[str, Any]) -> None:
+    """A study's settings as JSON (which YAML reads too) in the one format its folder and docs/results/ use."""
+    atomic_write_json(path, settings, indent=1, sort_keys=True, default=str)
 
 
 @dataclass

@@ -19,12 +19,10 @@ import shutil
 from collections.abc import Sequence
 from pathlib import Path
 
-import yaml
-
 from ..core.io import atomic_write_text
 from ..core.settings import parse_config
 from ..families import TaskFamily, family_of
-from .config import RUN_CONFIG_FILE, StudyConfig
+from .config import RUN_CONFIG_FILE, StudyConfig, write_run_config
 from .episodes import EPISODES_FILE, episode_rows, write_episodes
 from .markdown import REPORT_FILE, render
 from .plan import Plan, make_plan
@@ -170,14 +168,16 @@ def _cell(labels: dict) -> tuple:
 
 
 def _publish_config(source: Path, target: Path) -> None:
-    """Copy the study's config next to its results, without the machine-local ``reuse_from`` folders
-    (:func:`load_config`): verbatim, comments included, when it names none; else rewritten as JSON (which
-    is YAML) with an empty list."""
-    settings = yaml.safe_load(source.read_text())
-    if isinstance(settings, dict) and settings.get(REUSE_SETTING):
-        atomic_write_text(target, json.dumps({**settings, REUSE_SETTING: []}, indent=1, sort_keys=True))
-    else:
-        _copy(source, target)
+    """Copy the study's config next to its results. A run's ``config.json`` (:data:`RUN_CONFIG_FILE`, as the
+    runner wrote it) is written without the machine-local ``reuse_from`` folders (:func:`load_config`), in the
+    runner's own format; any other config file is copied verbatim, comments included (a ``reuse_from`` in it is
+    ignored when it is read)."""
+    if source.name == RUN_CONFIG_FILE and source.resolve() != target.resolve():
+        settings = json.loads(source.read_text())
+        if settings.get(REUSE_SETTING):
+            write_run_config(target, {**settings, REUSE_SETTING: []})
+            return
+    _copy(source, target)
 
 
 def _copy(source: Path, target: Path) -> None:

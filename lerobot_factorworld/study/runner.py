@@ -23,7 +23,7 @@ from tqdm import tqdm
 from ..core.io import atomic_write_json
 from ..datasets.hub import check_hub_token
 from .checkpoint import check_checkpoints, fetch_checkpoints
-from .config import RUN_CONFIG_FILE, StudyConfig
+from .config import RUN_CONFIG_FILE, StudyConfig, write_run_config
 from .cost import describe, fit_cost_model
 from .episodes import push_results
 from .executors import make_executor, task_units
@@ -85,7 +85,7 @@ def run_study(cfg: StudyConfig, command: str | None = None) -> StudyOutcome | st
         check_not_stale(cfg, stale)  # strict: before any work
         warn_stale(cfg, plan, study_dir, stale)
         set_aside = rerun_stale(plan, study_dir, stale) if cfg.rerun_stale else []
-        atomic_write_json(study_dir / RUN_CONFIG_FILE, asdict(cfg), indent=1, sort_keys=True, default=str)
+        write_run_config(study_dir / RUN_CONFIG_FILE, asdict(cfg))
         atomic_write_json(
             study_dir / PLAN_FILE, [s.to_dict() for s in plan.steps], indent=1, sort_keys=True, default=str
         )

@@ -229,11 +229,8 @@ def _current() -> tuple[Timings, str]:
 def warm_up() -> float:
     """Import what steps import (torch, LeRobot's dataset, training and evaluation stacks, the simulation)
     and return the seconds it took: a ``grouped`` worker does it as soon as the pool starts, all workers at
-    once, instead of each paying it in the middle of its first step (on the study's critical path). Also keeps
-    freed memory in the process (:func:`~..core.memory.keep_freed_memory`: CPU training updates about 1.25x
-    faster, byte-identical results), which the workers forked from it inherit; ``per_step`` does neither."""
+    once, instead of each paying it in the middle of its first step (on the study's critical path)."""
     start = time.perf_counter()
-    keep_freed_memory()
     os.environ.setdefault("MUJOCO_GL", "egl")
     # Deliberately here: these are the heavy imports of a step (seconds), wanted in workers only.
     import lerobot.datasets.lerobot_dataset  # noqa: F401, PLC0415
@@ -249,7 +246,12 @@ def warm_up() -> float:
 def run_steps(steps_data: list[dict[str, Any]], study_dir: str, execution: str = "per_step") -> dict[str, str | None]:
     """Run ``steps_data`` one after another in this process (e.g. the evaluations of one checkpoint, which
     then share the loaded policy); ``{key: None}`` for a finished step, ``{key: error}`` for a failed one
-    (the others still run). Each step writes its own ``result.json`` as :func:`run_step` does."""
+    (the others still run). Each step writes its own ``result.json`` as :func:`run_step` does. A ``grouped``
+    worker (local or on Ray) keeps freed memory
+    (:func:`lerobot_factorworld.core.memory.keep_freed_memory`): a training's speed then does not depend on what
+    the worker ran before, and its results do not change; ``per_step`` leaves glibc's malloc as it is."""
+    if execution == "grouped":
+        keep_freed_memory()
     out: dict[str, str | None] = {}
     for data in steps_data:
         key = Step.from_dict(data).key
