@@ -9,7 +9,7 @@ setting moves memory, not arithmetic).
     .venv/bin/python scripts/bench_malloc.py --quick     # the smoke test's scale
 
 The last line printed is exactly ``ratio: <float>`` = default ms per update / kept-memory ms per update
-(measured: 1.2-1.3x on the 2-core machine, 2026-11-27).
+(what it measured: docs/study.md, Throughput).
 """
 
 from __future__ import annotations
