@@ -312,6 +312,7 @@ EXPECTED_SECONDS = {
     "tests/test_docs_results.py::test_every_committed_report_and_fenced_docs_table_is_what_its_results_csv_regenerates": 16.0,
     "tests/test_profile.py::test_profile_of_a_lerobot_metaworld_checkpoint": 16.0,
     "tests/test_rt1.py::test_lerobot_train_lowers_the_loss_and_lerobot_eval_runs_the_checkpoint": 15.0,
+    "tests/test_bench_scripts.py::test_bench_script_quick_prints_ratio_last[malloc]": 14.0,
     "tests/test_compat.py::test_dataset_sidecars_are_byte_identical[sidecar_door-open.json]": 15.0,
     "tests/test_compat.py::test_dataset_sidecars_are_byte_identical[sidecar_pick.json]": 15.0,
     "tests/test_profile.py::test_profile_writes_a_studys_outputs_without_collecting_or_training": 13.0,
