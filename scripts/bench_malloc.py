@@ -22,11 +22,12 @@ import subprocess
 import sys
 import time
 
-from _bench import add_repo_to_path, print_table, ratio_line, round_order
+from _bench import add_repo_to_path, optimizer_step, print_table, ratio_line, round_order
 
 add_repo_to_path()
 
 WAYS = ("default", "keep_freed")
+GRAD_CLIP_NORM = 10.0
 
 
 def child(way: str, steps: int, batch_size: int) -> dict:
@@ -61,19 +62,11 @@ def child(way: str, steps: int, batch_size: int) -> dict:
         for _ in range(4)
     ]
     policy.train()
-
-    def update(i: int) -> None:
-        loss, _ = policy.forward(batches[i % len(batches)])
-        loss.backward()
-        torch.nn.utils.clip_grad_norm_(policy.parameters(), 10.0)
-        optimizer.step()
-        optimizer.zero_grad(set_to_none=True)
-
     for i in range(3):
-        update(i)
+        optimizer_step(policy, optimizer, batches[i % len(batches)], GRAD_CLIP_NORM)
     start = time.perf_counter()
     for i in range(steps):
-        update(i)
+        optimizer_step(policy, optimizer, batches[i % len(batches)], GRAD_CLIP_NORM)
     seconds = time.perf_counter() - start
     weights = hashlib.sha256(b"".join(t.detach().numpy().tobytes() for t in policy.state_dict().values()))
     return {"ms": 1000 * seconds / steps, "weights": weights.hexdigest()}

@@ -172,7 +172,7 @@ def _publish_config(source: Path, target: Path) -> None:
     runner wrote it) is written without the machine-local ``reuse_from`` folders (:func:`load_config`), in the
     runner's own format; any other config file is copied verbatim, comments included (a ``reuse_from`` in it is
     ignored when it is read)."""
-    if source.name == RUN_CONFIG_FILE and source.resolve() != target.resolve():
+    if source.name == RUN_CONFIG_FILE:
         settings = json.loads(source.read_text())
         if settings.get(REUSE_SETTING):
             write_run_config(target, {**settings, REUSE_SETTING: []})
