@@ -564,6 +564,30 @@ def test_a_study_reuses_another_studys_finished_steps_by_key(toy, tmp_path):
         replace(reuser, reuse_from=[str(tmp_path)])
 
 
+@TOY_GROUP
+def test_a_batched_evaluation_is_its_own_step_and_runs_vectorised(toy, tmp_path):
+    """``eval.batch_size: 2`` on N = 1 of the toy, reusing its folder: the collection and training are linked, but
+    both evaluations run anew (a batch changes the actions' last bits, so it is in their key) in one batch of 2."""
+    import csv
+
+    from lerobot_factorworld.study.plan import make_plan
+    from lerobot_factorworld.study.runner import run_study
+
+    cfg, _ = toy
+    narrow, _ = _toy_config(tmp_path / "batched", n_train_envs="[1]", factors="[light]")
+    batched = replace(narrow, reuse_from=[cfg.out_dir], eval=replace(narrow.eval, batch_size=2))
+    outcome = run_study(batched, command="batched")
+    assert not outcome.failed, outcome.failed
+    assert outcome.ran == {"collect": 0, "train": 0, "eval": 2} and outcome.cached == {"collect": 1, "train": 1, "eval": 0}
+    for step in make_plan(batched).of_kind("eval"):
+        recorded = json.loads((step.folder(batched.out_dir) / "step.json").read_text())
+        assert recorded["inputs"]["batch_size"] == 2
+        log = (step.folder(batched.out_dir) / "log.txt").read_text()  # LeRobot's progress: one batch of 2 episodes
+        assert re.search(r"Stepping through eval batches: +0%\|[^|]*\| 0/1 ", log), log[:300]
+    rows = list(csv.DictReader(open(outcome.results)))
+    assert sorted(r["condition"] for r in rows) == ["light", "train"] and all(r["episodes"] == "2" for r in rows)
+
+
 # --- command line -------------------------------------------------------------------------------
 
 

@@ -67,13 +67,18 @@ def test_collect_key_holds_the_data_version_and_package_versions_not_the_factor_
         assert not _keys(cfg, kind) & keys, kind
 
 
-def test_eval_key_ignores_batch_size_and_threads_and_train_ignores_n_test_envs():
+def test_eval_key_ignores_threads_holds_a_batch_above_one_and_train_ignores_n_test_envs():
     cfg = _cfg()
     keys = _eval_keys(cfg)
-    faster = replace(cfg, eval=replace(cfg.eval, batch_size=2, threads=2))
-    assert _eval_keys(faster) == keys
-    step = next(s for s in make_plan(faster).of_kind("eval"))
-    assert step.run == {"batch_size": 2, "threads": 2} and "threads" not in step.label
+    assert all("batch_size" not in s.inputs for s in make_plan(cfg).of_kind("eval"))  # one at a time: keys as before
+    threads = replace(cfg, eval=replace(cfg.eval, threads=2))
+    assert _eval_keys(threads) == keys
+    step = next(s for s in make_plan(threads).of_kind("eval"))
+    assert step.run == {"threads": 2} and "threads" not in step.label
+    batched = replace(cfg, eval=replace(cfg.eval, batch_size=2))
+    assert not set(_eval_keys(batched).values()) & set(keys.values())  # a batch changes the actions' last bits
+    assert {s.inputs["batch_size"] for s in make_plan(batched).of_kind("eval")} == {2}
+    assert _keys(batched, "train") == _keys(cfg, "train")
     four = _cfg(eval={"n_test_envs": 2, "episodes": 4})
     keys = _eval_keys(four)
     changed = _eval_keys(replace(four, eval=replace(four.eval, n_test_envs=4)))

@@ -354,8 +354,9 @@ class EvalSettings:
             evaluations, and their keys, stay as they are.
         device: Where the policy runs during evaluation (``cpu``, ``cuda``, ``cuda:<index>``, ``mps``);
             in the step's key (GPU kernels need not give the CPU's actions bit for bit).
-        batch_size: Vectorised environments per evaluation (not in the key; a batch changes the actions'
-            last bits, not the quick study's successes, and is slower on CPU: docs/study.md, Throughput).
+        batch_size: Vectorised environments per evaluation. In the key when above 1 (a batch changes the
+            actions' last bits, though not the quick study's successes, and is slower on CPU: docs/study.md,
+            Throughput); 1 (one at a time) keeps every key it always had.
         threads: Torch CPU threads per evaluation (not in the key).
     """
 

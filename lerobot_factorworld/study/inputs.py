@@ -171,7 +171,7 @@ class EvalInputs:
     its dataset gives the environments) or a given one (``checkpoint``, the content hash of its files, and
     ``environments``; the step has no dependency)."""
 
-    OPTIONAL: ClassVar[frozenset[str]] = frozenset({"n_test_envs", "checkpoint", "environments"})
+    OPTIONAL: ClassVar[frozenset[str]] = frozenset({"n_test_envs", "checkpoint", "environments", "batch_size"})
 
     condition: str
     episodes: int
@@ -182,8 +182,13 @@ class EvalInputs:
     n_test_envs: int | None = None  # None (and not in the key) for ``train``: the dataset's own environments
     checkpoint: str | None = None  # a given checkpoint's content hash (``checkpoint.py``); None: a trained one
     environments: EnvInputs | None = None  # a given checkpoint's environments; None: its dataset's
+    # Vectorised environments when more than one: a batch of frames changes the actions' last bits. None: one
+    # at a time, left out of the key, so every evaluation run one at a time keeps the key it always had.
+    batch_size: int | None = None
 
     def __post_init__(self) -> None:
+        if self.batch_size is not None and self.batch_size < 2:
+            raise ValueError(f"an evaluation's batch_size is None (one at a time) or at least 2, not {self.batch_size}")
         if (self.condition == TRAIN_SUITE) != (self.n_test_envs is None):
             raise ValueError(f"n_test_envs is set for every shifted condition and only for them ({self.condition})")
         if (self.checkpoint is None) != (self.environments is None):

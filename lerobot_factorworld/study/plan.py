@@ -161,9 +161,9 @@ def _train_step(
 
 
 def _eval_step(cfg: StudyConfig, condition: str, train: Step, collect: Step, labels: dict) -> Step:
-    """One condition of one checkpoint; batch size and threads do not change results (kept out of the key),
-    and ``train`` (the dataset's own environments) does not depend on ``n_test_envs``."""
-    run = {"batch_size": cfg.eval.batch_size, "threads": cfg.eval.threads}
+    """One condition of one checkpoint; threads do not change results (kept out of the key), and ``train`` (the
+    dataset's own environments) does not depend on ``n_test_envs``."""
+    run = {"threads": cfg.eval.threads}
     inputs = _eval_inputs(cfg, condition, labels["task"])
     return Step("eval", inputs.to_dict(), (train.key, collect.key), {**labels, "condition": condition, RUN: run})
 
@@ -173,7 +173,7 @@ def _given_eval_step(
 ) -> Step:
     """One condition of a given checkpoint: no dependency; the key holds the checkpoint's content hash
     (``keyed``) and the environments (where the checkpoint lies travels in ``run``)."""
-    run = {"batch_size": cfg.eval.batch_size, "threads": cfg.eval.threads, GIVEN_CHECKPOINT: checkpoint}
+    run = {"threads": cfg.eval.threads, GIVEN_CHECKPOINT: checkpoint}
     inputs = replace(_eval_inputs(cfg, condition, labels["task"]), checkpoint=keyed[checkpoint], environments=env)
     return Step("eval", inputs.to_dict(), (), {**labels, "condition": condition, RUN: run})
 
@@ -188,6 +188,7 @@ def _eval_inputs(cfg: StudyConfig, condition: str, task: str) -> EvalInputs:
         device=ev.device,
         versions=versions(),
         n_test_envs=None if condition == TRAIN_SUITE else ev.n_test_envs,
+        batch_size=ev.batch_size if ev.batch_size > 1 else None,
     )
 
 

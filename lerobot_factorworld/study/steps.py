@@ -582,7 +582,7 @@ def _run_eval(step: Step, folder: Path, deps: list[Path]) -> dict[str, Any]:
         )
     with timings.span("env_build"):
         env_pre, env_post = make_env_pre_post_processors(env_cfg=env_cfg, policy_cfg=policy_cfg)
-        envs = make_env(env_cfg, n_envs=run.get("batch_size", 1), use_async_envs=False)
+        envs = make_env(env_cfg, n_envs=inputs.batch_size or 1, use_async_envs=False)
     # timed, unchanged (each part exclusive of the parts inside it): scene compilation and rendering, the
     # environments' resets and steps, the policy's actions, the rest of LeRobot's rollout loop
     with (
