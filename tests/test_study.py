@@ -578,7 +578,11 @@ def test_a_batched_evaluation_is_its_own_step_and_runs_vectorised(toy, tmp_path)
     batched = replace(narrow, reuse_from=[cfg.out_dir], eval=replace(narrow.eval, batch_size=2))
     outcome = run_study(batched, command="batched")
     assert not outcome.failed, outcome.failed
-    assert outcome.ran == {"collect": 0, "train": 0, "eval": 2} and outcome.cached == {"collect": 1, "train": 1, "eval": 0}
+    assert outcome.ran == {"collect": 0, "train": 0, "eval": 2} and outcome.cached == {
+        "collect": 1,
+        "train": 1,
+        "eval": 0,
+    }
     for step in make_plan(batched).of_kind("eval"):
         recorded = json.loads((step.folder(batched.out_dir) / "step.json").read_text())
         assert recorded["inputs"]["batch_size"] == 2
