@@ -458,9 +458,10 @@ def test_changing_one_setting_changes_only_the_steps_that_depend_on_it(tmp_path)
 
 @TOY_GROUP
 @pytest.mark.slow
-def test_dataset_gives_the_training_condition_and_mismatches_are_refused(toy):
+def test_dataset_gives_the_training_condition_and_mismatches_are_refused(toy, tmp_path):
     from lerobot_factorworld.adapters.env_config import FactorWorldEnvConfig
     from lerobot_factorworld.protocol.sampling import sample_configs
+    from lerobot_factorworld.protocol.sidecar import SIDECAR
     from lerobot_factorworld.study.plan import make_plan
     from lerobot_factorworld.study.steps import read_result
 
@@ -473,9 +474,16 @@ def test_dataset_gives_the_training_condition_and_mismatches_are_refused(toy):
     train = env_cfg.suites("handle-press")["train"]
     factors = ["light", "table_texture", "camera_pos"]
     assert train == sample_configs("handle-press", 2, 0, "train", factors, env_cfg.sampling)
-    assert env_cfg.gym_kwargs["object_pos_width"] == "narrow"
+    assert env_cfg.gym_kwargs["object_pos_width"] == "narrow" and env_cfg.gym_kwargs["quality"] == "fast"
     FactorWorldEnvConfig(task="handle-press", dataset_root=root, n_train_envs=2, seed=0)  # agreeing: fine
-    for wrong in ({"n_train_envs": 5}, {"seed": 1}, {"train_factors": ["light"]}):
+    lod = tmp_path / "lod"  # the same side-car, as if collected at the lod quality: evaluated at lod
+    (lod / SIDECAR).parent.mkdir(parents=True)
+    sidecar = json.loads(Path(root, SIDECAR).read_text())
+    (lod / SIDECAR).write_text(json.dumps({**sidecar, "settings": {**sidecar["settings"], "quality": "lod"}}))
+    assert FactorWorldEnvConfig(task="handle-press", dataset_root=str(lod)).gym_kwargs["quality"] == "lod"
+    with pytest.raises(ValueError, match="quality='fast' but the dataset has 'lod'"):
+        FactorWorldEnvConfig(task="handle-press", dataset_root=str(lod), quality="fast")
+    for wrong in ({"n_train_envs": 5}, {"seed": 1}, {"train_factors": ["light"]}, {"quality": "full"}):
         with pytest.raises(ValueError, match="disagrees with dataset"):
             FactorWorldEnvConfig(task="handle-press", dataset_root=root, **wrong)
     with pytest.raises(ValueError, match="no environment of task 'door-open'"):

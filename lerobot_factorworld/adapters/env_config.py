@@ -69,7 +69,8 @@ class FactorWorldEnvConfig(EnvConfig):
         image_size: Square image side in pixels.
         quality: ``fast`` (CPU-friendly, the default with ``obs=factorworld``), ``full`` (Meta-World's shadows and
             multisampling, the default with ``obs=lerobot_metaworld``) or ``lod`` (``fast`` with simplified robot
-            meshes: ~2x faster frames, slightly different pixels).
+            meshes: ~2x faster frames, slightly different pixels). With ``dataset_root``, the dataset's (one
+            given must agree): the ``train`` condition then renders the frames the policy was trained on.
         episode_length: Step limit; ``None`` uses each task's horizon.
         n_train_envs: Number of training environments N (default 5, or the dataset's).
         train_factors: Factors varied across the training environments (default: the paper's seven, or
@@ -118,8 +119,8 @@ class FactorWorldEnvConfig(EnvConfig):
 
     def __post_init__(self) -> None:
         check_obs_mode(self.obs)
+        self._resolve_train_condition()  # with dataset_root, the dataset's quality unless one is given
         self.quality = DEFAULT_QUALITY[self.obs] if self.quality is None else self.quality
-        self._resolve_train_condition()
         self._validate()
         if self.obs == LEROBOT_METAWORLD_OBS:
             self.features, self.features_map = lerobot_metaworld_features()
@@ -224,12 +225,13 @@ class FactorWorldEnvConfig(EnvConfig):
                 "train_factors": self.train_factors,
                 "seed": self.seed,
                 "sampling": explicit_sampling,
+                "quality": self.quality,
             },
         )
         for name in self.task_names:
             dataset.train_configs(name)  # raises when the dataset holds no environment of this task
         self.n_train_envs, self.train_factors, self.seed = dataset.n_envs, list(dataset.factors), dataset.seed
-        self.sampling = dataset.sampling
+        self.sampling, self.quality = dataset.sampling, dataset.quality
 
     @property
     def task_names(self) -> list[str]:

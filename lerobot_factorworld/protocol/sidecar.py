@@ -30,6 +30,7 @@ class DatasetCondition:
     seed: int
     sampling: SamplingOptions
     environments: tuple[SceneConfig, ...]
+    quality: str = "fast"  # how its frames were rendered (``scene.build.QUALITIES``)
 
     def train_configs(self, task: str) -> list[SceneConfig]:
         configs = sorted((c for c in self.environments if c.task == task), key=lambda c: c.env_id)
@@ -62,6 +63,7 @@ def read_dataset_condition(root: str | Path) -> DatasetCondition:
         seed=int(settings["seed"]),
         sampling=SamplingOptions(**settings.get("sampling", {})),
         environments=environments,
+        quality=settings.get("quality", "fast"),
     )
 
 
@@ -72,6 +74,7 @@ def check_against_dataset(dataset: DatasetCondition, requested: dict[str, Any]) 
         "train_factors": sorted(dataset.factors),  # each factor has its own RNG: the order does not matter
         "seed": dataset.seed,
         "sampling": dataset.sampling,
+        "quality": dataset.quality,
     }
     requested = {k: sorted(v) if k == "train_factors" and v is not None else v for k, v in requested.items()}
     wrong = [
