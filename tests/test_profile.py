@@ -3,6 +3,7 @@ unshifted condition and under factors, written as a study (report.md, results.cs
 no collection and no training; a study mixing a trained and a given method; bad input refused in one line."""
 
 import csv
+import json
 import shutil
 import subprocess
 import sys
@@ -70,7 +71,7 @@ def test_train_defaults_to_the_checkpoints_own_dataset(bc_checkpoint, tiny_datas
     --dataset_root that is not a Factor World dataset, are refused in one line."""
     from lerobot_factorworld.core.settings import parse_config
     from lerobot_factorworld.protocol.sampling import sample_configs
-    from lerobot_factorworld.protocol.sidecar import read_dataset_condition
+    from lerobot_factorworld.protocol.sidecar import SIDECAR, read_dataset_condition
     from lerobot_factorworld.study.inputs import EvalInputs
     from lerobot_factorworld.study.plan import make_plan
     from lerobot_factorworld.study.policy_profile import ProfileConfig
@@ -92,6 +93,12 @@ def test_train_defaults_to_the_checkpoints_own_dataset(bc_checkpoint, tiny_datas
         profile(bc_checkpoint, "--n_train_envs=5")
     with pytest.raises(ValueError, match="is not a Factor World dataset"):  # SettingError: one line at the CLI
         profile(bc_checkpoint, f"--dataset_root={tmp_path}")
+    lod = tmp_path / "lod"  # its side-car, as if rendered at lod: a study cannot, so refused
+    (lod / SIDECAR).parent.mkdir(parents=True)
+    sidecar = json.loads((tiny_dataset / SIDECAR).read_text())
+    (lod / SIDECAR).write_text(json.dumps({**sidecar, "settings": {**sidecar["settings"], "quality": "lod"}}))
+    with pytest.raises(ValueError, match="rendered at quality lod, which a profile cannot reproduce"):
+        profile(bc_checkpoint, f"--dataset_root={lod}")
     # no train_config.json (not trained by lerobot-train here): the defaults, 5 environments, the paper's factors
     flags = [f"--policy.path={factorworld_checkpoint}", "--task=pick-place", "--eval.n_test_envs=5"]
     untrained = parse_config(ProfileConfig, [*flags, "--eval.episodes=5", f"--out_dir={tmp_path / 'out'}"], "profile")

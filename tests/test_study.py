@@ -475,6 +475,8 @@ def test_dataset_gives_the_training_condition_and_mismatches_are_refused(toy, tm
     factors = ["light", "table_texture", "camera_pos"]
     assert train == sample_configs("handle-press", 2, 0, "train", factors, env_cfg.sampling)
     assert env_cfg.gym_kwargs["object_pos_width"] == "narrow" and env_cfg.gym_kwargs["quality"] == "fast"
+    assert (env_cfg.cameras, env_cfg.image_size) == ("front", 48)  # the toy collects at 48 px, not the default 84
+    assert env_cfg.features["pixels/front"].shape == (48, 48, 3)
     FactorWorldEnvConfig(task="handle-press", dataset_root=root, n_train_envs=2, seed=0)  # agreeing: fine
     lod = tmp_path / "lod"  # the same side-car, as if collected at the lod quality: evaluated at lod
     (lod / SIDECAR).parent.mkdir(parents=True)
@@ -483,7 +485,8 @@ def test_dataset_gives_the_training_condition_and_mismatches_are_refused(toy, tm
     assert FactorWorldEnvConfig(task="handle-press", dataset_root=str(lod)).gym_kwargs["quality"] == "lod"
     with pytest.raises(ValueError, match="quality='fast' but the dataset has 'lod'"):
         FactorWorldEnvConfig(task="handle-press", dataset_root=str(lod), quality="fast")
-    for wrong in ({"n_train_envs": 5}, {"seed": 1}, {"train_factors": ["light"]}, {"quality": "full"}):
+    wrong_settings = ({"n_train_envs": 5}, {"seed": 1}, {"train_factors": ["light"]}, {"quality": "full"})
+    for wrong in (*wrong_settings, {"image_size": 84}, {"cameras": "top"}, {"cameras": "front,top"}):
         with pytest.raises(ValueError, match="disagrees with dataset"):
             FactorWorldEnvConfig(task="handle-press", dataset_root=root, **wrong)
     with pytest.raises(ValueError, match="no environment of task 'door-open'"):

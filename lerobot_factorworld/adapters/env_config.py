@@ -65,8 +65,8 @@ class FactorWorldEnvConfig(EnvConfig):
     Attributes:
         task: One task or a comma-separated list (each becomes a task id within every suite).
         cameras: Comma-separated camera names (see ``factorworld cameras``); each gives
-            ``observation.images.<camera>``.
-        image_size: Square image side in pixels.
+            ``observation.images.<camera>``. Default ``front``, or the dataset's (``dataset_root``).
+        image_size: Square image side in pixels. Default 84, or the dataset's.
         quality: ``fast`` (CPU-friendly, the default with ``obs=factorworld``), ``full`` (Meta-World's shadows and
             multisampling, the default with ``obs=lerobot_metaworld``) or ``lod`` (``fast`` with simplified robot
             meshes: ~2x faster frames, slightly different pixels). With ``dataset_root``, the dataset's (one
@@ -82,8 +82,8 @@ class FactorWorldEnvConfig(EnvConfig):
         seed: Seed of the environment sampling (default 0, or the dataset's; episode seeds come from
             ``--seed``). A condition's test environments depend only on this seed and its factor names.
         dataset_root: A Factor World dataset (``factorworld collect``) whose training environments are the
-            ``train`` condition: N, factors, seed and sampling widths are read from its
-            ``meta/factorworld.json``; settings given explicitly must agree with it.
+            ``train`` condition: N, factors, seed, sampling widths, cameras, image size and render quality are
+            read from its ``meta/factorworld.json``; settings given explicitly must agree with it.
         include_train: Also evaluate on the training environments (needed for the generalization gap).
         configs_path: JSON file of training configurations (``factorworld sample`` writes one) to use
             instead of sampling them.
@@ -100,8 +100,8 @@ class FactorWorldEnvConfig(EnvConfig):
 
     task: str = "pick-place"
     fps: int = CONTROL_FPS
-    cameras: str = DEFAULT_CAMERAS
-    image_size: int = DEFAULT_IMAGE_SIZE
+    cameras: str | None = None
+    image_size: int | None = None
     quality: str | None = None
     episode_length: int | None = None
     n_train_envs: int | None = None
@@ -119,7 +119,9 @@ class FactorWorldEnvConfig(EnvConfig):
 
     def __post_init__(self) -> None:
         check_obs_mode(self.obs)
-        self._resolve_train_condition()  # with dataset_root, the dataset's quality unless one is given
+        self._resolve_train_condition()  # with dataset_root: its cameras, image size and quality unless given
+        self.cameras = DEFAULT_CAMERAS if self.cameras is None else self.cameras
+        self.image_size = DEFAULT_IMAGE_SIZE if self.image_size is None else self.image_size
         self.quality = DEFAULT_QUALITY[self.obs] if self.quality is None else self.quality
         self._validate()
         if self.obs == LEROBOT_METAWORLD_OBS:
@@ -226,12 +228,20 @@ class FactorWorldEnvConfig(EnvConfig):
                 "seed": self.seed,
                 "sampling": explicit_sampling,
                 "quality": self.quality,
+                "cameras": None if self.cameras is None else check_cameras(self.cameras),
+                "image_size": self.image_size,
             },
         )
         for name in self.task_names:
             dataset.train_configs(name)  # raises when the dataset holds no environment of this task
         self.n_train_envs, self.train_factors, self.seed = dataset.n_envs, list(dataset.factors), dataset.seed
-        self.sampling, self.quality = dataset.sampling, dataset.quality
+        self.sampling = dataset.sampling
+        if dataset.quality is not None:
+            self.quality = dataset.quality
+        if dataset.cameras is not None:
+            self.cameras = ",".join(dataset.cameras)
+        if dataset.image_size is not None:
+            self.image_size = dataset.image_size
 
     @property
     def task_names(self) -> list[str]:

@@ -12,6 +12,7 @@ from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any
 
+from ..core.checks import split_list
 from ..factors.values import SceneConfig
 from .sampling import SamplingOptions
 
@@ -30,7 +31,10 @@ class DatasetCondition:
     seed: int
     sampling: SamplingOptions
     environments: tuple[SceneConfig, ...]
-    quality: str = "fast"  # how its frames were rendered (``scene.build.QUALITIES``)
+    # How its frames were made; None where the side-car does not record it (hand-made or older ones).
+    quality: str | None = None  # render quality (``scene.build.QUALITIES``)
+    cameras: tuple[str, ...] | None = None  # each stored as ``observation.images.<camera>``
+    image_size: int | None = None
 
     def train_configs(self, task: str) -> list[SceneConfig]:
         configs = sorted((c for c in self.environments if c.task == task), key=lambda c: c.env_id)
@@ -63,24 +67,29 @@ def read_dataset_condition(root: str | Path) -> DatasetCondition:
         seed=int(settings["seed"]),
         sampling=SamplingOptions(**settings.get("sampling", {})),
         environments=environments,
-        quality=settings.get("quality", "fast"),
+        quality=settings.get("quality"),
+        cameras=tuple(split_list(settings["cameras"])) if "cameras" in settings else None,
+        image_size=int(settings["image_size"]) if "image_size" in settings else None,
     )
 
 
 def check_against_dataset(dataset: DatasetCondition, requested: dict[str, Any]) -> None:
-    """Refuse settings given explicitly (not ``None``) that disagree with what the dataset was collected with."""
+    """Refuse settings given explicitly (not ``None``) that disagree with what the dataset was collected with
+    (as far as its side-car records it)."""
     recorded = {
         "n_train_envs": dataset.n_envs,
         "train_factors": sorted(dataset.factors),  # each factor has its own RNG: the order does not matter
         "seed": dataset.seed,
         "sampling": dataset.sampling,
         "quality": dataset.quality,
+        "cameras": dataset.cameras,
+        "image_size": dataset.image_size,
     }
     requested = {k: sorted(v) if k == "train_factors" and v is not None else v for k, v in requested.items()}
     wrong = [
         f"{key}={value!r} but the dataset has {recorded[key]!r}"
         for key, value in requested.items()
-        if value is not None and _normalise(value) != _normalise(recorded[key])
+        if value is not None and recorded[key] is not None and _normalise(value) != _normalise(recorded[key])
     ]
     if wrong:
         raise ValueError(

@@ -116,7 +116,7 @@ class ProfileConfig:
     def _make_study(self) -> StudyConfig:
         # Deliberately here: the env config imports LeRobot (seconds); it resolves the train condition's
         # defaults for the observation and checks the task, cameras and image size as lerobot-eval would.
-        from ..adapters.env_config import FactorWorldEnvConfig  # noqa: PLC0415
+        from ..adapters.env_config import DEFAULT_QUALITY, FactorWorldEnvConfig  # noqa: PLC0415
 
         view = {"cameras": self.env.cameras, "image_size": self.env.image_size}
         if self.dataset_root is None and self.env.obs == FACTORWORLD_OBS:
@@ -132,6 +132,11 @@ class ProfileConfig:
         )
         if len(env.task_names) != 1:
             raise ValueError(f"factorworld profile takes one task, got {self.task!r}")
+        if env.quality != DEFAULT_QUALITY[env.obs]:  # a study renders each observation at its default quality
+            raise ValueError(
+                f"dataset {self.dataset_root} was rendered at quality {env.quality}, which a profile cannot reproduce; "
+                "evaluate the checkpoint with lerobot-eval --env.type=factorworld --env.dataset_root=<its dataset>"
+            )
         name = self.policy.name or _default_name(self.policy.path)
         method = MethodConfig(name=name, checkpoint=self.policy.path, obs=self.env.obs)
         return StudyConfig(
