@@ -1,0 +1,77 @@
+"""One factor's gap across two studies (``study/compare.py``, ``scripts/compare_gaps.py``): the point estimates are
+the studies' own seed means, the difference's interval behaves (0 for a study against itself, away from 0 for a
+large effect), bad input is refused naming the valid choices, and the script prints what docs/findings.md quotes."""
+
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from lerobot_factorworld.study.compare import Side, compare_gaps
+from lerobot_factorworld.study.results import read_results
+
+ROOT = Path(__file__).resolve().parents[1]
+RESULTS = ROOT / "docs" / "results"
+PICK_PLACE = Side("bc", "pick-place")
+
+
+def _row(seed: int, condition: str, successes: int, episodes: int = 40, method: str = "bc") -> dict:
+    return {"method": method, "task": "pick-place", "n_train_envs": 5, "widths": "default", "seed": seed,
+            "condition": condition, "success_rate": successes / episodes, "episodes": episodes}  # fmt: skip
+
+
+def _study(train: int, shifted: int, seeds=(0, 1, 2)) -> list[dict]:
+    return [r for s in seeds for r in (_row(s, "train", train), _row(s, "light", shifted))]
+
+
+def test_the_gaps_are_each_studys_seed_mean_and_the_difference_theirs():
+    first = read_results(RESULTS / "f7_object_texture_168px" / "results.csv")
+    second = read_results(RESULTS / "f1_ordering" / "results.csv")
+    result = compare_gaps(first, second, "object_texture", (PICK_PLACE, PICK_PLACE))
+    assert result.seeds == (0, 1, 2) and result.episodes == (40, 20)
+    for rows, gap in ((first, result.gaps[0]), (second, result.gaps[1])):
+        cells = [r for r in rows if r["task"] == "pick-place" and r["condition"] == "object_texture"]
+        assert gap == pytest.approx(sum(r["gap"] for r in cells) / len(cells))
+    assert result.difference == pytest.approx(result.gaps[0] - result.gaps[1])
+    low, high = result.difference_interval
+    assert low < result.difference < high
+    assert compare_gaps(first, second, "object_texture", (PICK_PLACE, PICK_PLACE)) == result  # deterministic
+
+
+def test_a_study_against_itself_differs_by_nothing_and_a_large_effect_is_resolved():
+    same = compare_gaps(_study(36, 20), _study(36, 20), "light", (PICK_PLACE, PICK_PLACE))
+    assert same.difference == 0.0 and same.difference_interval[0] < 0 < same.difference_interval[1]
+    large = compare_gaps(_study(36, 4), _study(36, 34), "light", (PICK_PLACE, PICK_PLACE))
+    assert large.difference == pytest.approx(0.75) and large.difference_interval[0] > 0.4
+    only_shared = compare_gaps(_study(36, 4), _study(36, 34, seeds=(1, 2, 3)), "light", (PICK_PLACE, PICK_PLACE))
+    assert only_shared.seeds == (1, 2)
+
+
+def test_bad_input_is_refused_naming_the_choices():
+    study = _study(36, 20)
+    with pytest.raises(ValueError, match="no cell of method 'bc_x'.*its methods: bc; its factors: light"):
+        compare_gaps(study, study, "light", (Side("bc_x", "pick-place"), PICK_PLACE))
+    with pytest.raises(ValueError, match="share no training seed"):
+        compare_gaps(study, _study(36, 20, seeds=(5,)), "light", (PICK_PLACE, PICK_PLACE))
+    two_n = [*study, {**_row(0, "train", 30), "n_train_envs": 20}]
+    with pytest.raises(ValueError, match=r"cells at N = \[5, 20\]; choose one"):
+        compare_gaps(two_n, study, "light", (PICK_PLACE, PICK_PLACE))
+
+
+def test_the_script_prints_the_difference_findings_quotes_and_refuses_in_one_line():
+    script = [sys.executable, str(ROOT / "scripts" / "compare_gaps.py")]
+    folders = [str(RESULTS / "f7_object_texture_168px"), str(RESULTS / "f1_ordering")]
+    proc = subprocess.run([*script, *folders, "--factor=object_texture", "--task=pick-place"], capture_output=True,
+                          text=True, timeout=120)  # fmt: skip
+    assert proc.returncode == 0, proc.stderr
+    last = proc.stdout.strip().splitlines()[-1]
+    assert last == "difference: +0.092 [-0.067, +0.250]"
+    assert last.split(": ")[1] in (ROOT / "docs" / "findings.md").read_text()
+    bad = subprocess.run([*script, *folders, "--factor=gravity", "--task=pick-place"], capture_output=True,
+                         text=True, timeout=120)  # fmt: skip
+    assert (
+        bad.returncode == 2
+        and bad.stderr.count("\n") == 1
+        and "its factors: object_texture, table_texture" in bad.stderr
+    )
