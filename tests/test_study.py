@@ -174,6 +174,7 @@ def test_pairs_are_counted_against_the_papers_band_per_task():
         "hard": {"a": 0.5, "b": 0.6, "c": 0.0, "a+b": 0.2, "a+c": 0.0, "b+c": 0.1},
     }
     rows = [row(task, condition, rate) for task, conditions in rates.items() for condition, rate in conditions.items()]
+    rows += [{**row(task, "train", 1.0), "n_factors": 0} for task in rates]
     bands = pair_bands(rows, "bc", 0.06)
     assert list(bands) == ["easy", "hard"]
     easy, hard = bands["easy"], bands["hard"]
@@ -181,6 +182,11 @@ def test_pairs_are_counted_against_the_papers_band_per_task():
     assert (hard.within, hard.below, hard.above) == (0, 1, 0)  # a+b: -0.6; c never succeeds: no metric
     # interactions: a+b (0.8 - 0.5 - 0.4), a+c (1 - 0.5 - 1), b+c (0.9 - 0.4 - 1)
     assert hard.mean_interaction == pytest.approx((-0.1 - 0.5 - 0.5) / 3)
+    # no episode counts: nothing to resample, so the interval is the point itself
+    assert hard.interaction_interval == pytest.approx((hard.mean_interaction, hard.mean_interaction))
+    counted = [{**r, "episodes": 20} for r in rows]  # 20 episodes per cell: an interval around the point
+    low, high = pair_bands(counted, "bc", 0.06)["hard"].interaction_interval
+    assert low < hard.mean_interaction < high and high - low > 0.1
     assert pair_bands(rows, "other", 0.06) == {}
 
 

@@ -128,12 +128,14 @@ def pair_rows(rows: Sequence[dict]) -> list[dict]:
 class PairBand:
     """One task's pairs against the paper's band: how many pair metrics (per cell, averaged over N and seeds)
     lie within ±tolerance, below it (the pair is worse than its harder factor) and above it, and the mean
-    interaction gap(A+B) - gap(A) - gap(B) (negative: the pair costs less than its two gaps added)."""
+    interaction gap(A+B) - gap(A) - gap(B) (negative: the pair costs less than its two gaps added) with its 95%
+    seed-bootstrap interval (NaN where no pair has its train cell)."""
 
     within: int
     below: int
     above: int
     mean_interaction: float
+    interaction_interval: tuple[float, float] = (math.nan, math.nan)
 
 
 def pair_bands(rows: Sequence[dict], method: str, tolerance: float) -> dict[str, PairBand]:
@@ -148,6 +150,7 @@ def pair_bands(rows: Sequence[dict], method: str, tolerance: float) -> dict[str,
         if not math.isnan(row["interaction"]):
             interactions[row["task"]].append(row["interaction"])
     out = {}
+    intervals = task_interactions(rows, method)
     for task in dict.fromkeys(task for task, _ in metrics):
         means = [float(np.mean(v)) for (t, _), v in metrics.items() if t == task]
         out[task] = PairBand(
@@ -155,6 +158,7 @@ def pair_bands(rows: Sequence[dict], method: str, tolerance: float) -> dict[str,
             below=sum(m < -tolerance for m in means),
             above=sum(m > tolerance for m in means),
             mean_interaction=float(np.mean(interactions[task])) if interactions[task] else math.nan,
+            interaction_interval=intervals.get(task, (math.nan, math.nan)),
         )
     return out
 
@@ -410,6 +414,34 @@ def pair_summary(rows: Sequence[dict], method: str, tolerance: float) -> PairSum
         pairs_per_cell=int(np.isfinite(point[:k]).sum()),
         pairs_pooled=int(np.isfinite(point[k : 2 * k]).sum()),
     )
+
+
+def task_interactions(rows: Sequence[dict], method: str) -> dict[str, tuple[float, float]]:
+    """Per task, the 95% seed-bootstrap interval of ``method``'s mean interaction gap(A+B) - gap(A) - gap(B)
+    over its pairs, N and seeds (main grid; a pair counts where its two factors and ``train`` were evaluated)."""
+    table = cells([r for r in main_grid(rows) if r["method"] == method])
+    col = table.column
+    quads: dict[str, list[tuple[int, ...]]] = defaultdict(list)  # task -> [(a+b, a, b, train) columns]
+    for key in table.keys:
+        if PAIR_SEPARATOR not in key[4]:
+            continue
+        others = [col.get((*key[:4], c)) for c in (*key[4].split(PAIR_SEPARATOR), TRAIN_SUITE)]
+        if None not in others:
+            quads[key[1]].append((col[key], *others))
+    if not quads:
+        return {}
+    tasks = list(quads)
+    flat = [q for task in tasks for q in quads[task]]
+    ab, a, b, train = (np.array([q[i] for q in flat], dtype=int) for i in range(4))
+    starts = np.cumsum([0, *(len(quads[task]) for task in tasks)])
+    groups = [list(range(starts[i], starts[i + 1])) for i in range(len(tasks))]
+
+    def statistic(r: np.ndarray, _n: np.ndarray) -> np.ndarray:
+        # (T - P_AB) - (T - P_A) - (T - P_B)
+        return group_mean(r[..., a] + r[..., b] - r[..., ab] - r[..., train], groups)
+
+    point, reps = table.bootstrap(statistic)
+    return {task: (low, high) for task, (_, low, high) in zip(tasks, _interval(point, reps), strict=True)}
 
 
 ALL_FACTORS = "all factors"  # the label of the mean over every factor given

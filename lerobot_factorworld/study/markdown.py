@@ -440,7 +440,7 @@ def _pairs_section(cfg: StudyConfig, rows: list[dict]) -> list[str]:
             f"Per task ({first}, per-cell metric averaged over N and seeds): "
             + "; ".join(
                 f"{task} {b.within} of {b.within + b.below + b.above} within ±{tol:.0%} ({b.below} below, "
-                f"{b.above} above; mean interaction {b.mean_interaction:+.3f})"
+                f"{b.above} above; mean interaction {b.mean_interaction:+.3f} {ci(*b.interaction_interval)})"
                 for task, b in bands.items()
             )
             + ".",
