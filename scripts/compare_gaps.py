@@ -8,7 +8,7 @@ is made): each side is one method on one task (at one N), over the training seed
     .venv/bin/python scripts/compare_gaps.py docs/results/f7_object_texture_colours \\
         docs/results/f7_object_texture_images --factor object_texture --task pick-place
 
-The last line is ``difference: <first minus second> [<low>, <high>]``. A bad folder, method, task or factor
+The last line is ``difference (first minus second): <value> [<low>, <high>]``. A bad folder, method, task or factor
 is refused in one line that names the valid choices.
 """
 
@@ -55,12 +55,13 @@ def main() -> None:
         raise SystemExit(2) from None
     seeds = ", ".join(map(str, result.seeds))
     print(f"{args.factor} on {args.task}, seeds {seeds} (seed-level bootstrap 95% intervals)")
-    for name, side, gap, (low, high), n in zip(
-        (args.first, args.second), sides, result.gaps, result.gap_intervals, result.episodes, strict=True
+    for name, side, (gap, low, high), counts in zip(
+        (args.first, args.second), sides, result.gaps, result.episodes, strict=True
     ):
-        print(f"  {name} ({side.method}, {n} episodes per cell): gap {gap:+.3f} [{low:+.3f}, {high:+.3f}]")
-    low, high = result.difference_interval
-    print(f"difference: {result.difference:+.3f} [{low:+.3f}, {high:+.3f}]")
+        episodes = "-".join(map(str, sorted({counts[0], counts[-1]})))
+        print(f"  {name} ({side.method}, {episodes} episodes per cell): gap {gap:+.3f} [{low:+.3f}, {high:+.3f}]")
+    difference, low, high = result.difference
+    print(f"difference (first minus second): {difference:+.3f} [{low:+.3f}, {high:+.3f}]")
 
 
 if __name__ == "__main__":

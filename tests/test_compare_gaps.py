@@ -22,28 +22,30 @@ def _row(seed: int, condition: str, successes: int, episodes: int = 40, method: 
 
 
 def _study(train: int, shifted: int, seeds=(0, 1, 2)) -> list[dict]:
-    return [r for s in seeds for r in (_row(s, "train", train), _row(s, "light", shifted))]
+    gap = (train - shifted) / 40
+    return [r for s in seeds for r in (_row(s, "train", train), {**_row(s, "light", shifted), "gap": gap})]
 
 
 def test_the_gaps_are_each_studys_seed_mean_and_the_difference_theirs():
     first = read_results(RESULTS / "f7_object_texture_168px" / "results.csv")
     second = read_results(RESULTS / "f1_ordering" / "results.csv")
     result = compare_gaps(first, second, "object_texture", (PICK_PLACE, PICK_PLACE))
-    assert result.seeds == (0, 1, 2) and result.episodes == (40, 20)
-    for rows, gap in ((first, result.gaps[0]), (second, result.gaps[1])):
+    assert result.seeds == (0, 1, 2) and result.episodes == ((40,), (20,))
+    for rows, (gap, low, high) in ((first, result.gaps[0]), (second, result.gaps[1])):
         cells = [r for r in rows if r["task"] == "pick-place" and r["condition"] == "object_texture"]
-        assert gap == pytest.approx(sum(r["gap"] for r in cells) / len(cells))
-    assert result.difference == pytest.approx(result.gaps[0] - result.gaps[1])
-    low, high = result.difference_interval
-    assert low < result.difference < high
+        assert gap == pytest.approx(sum(r["gap"] for r in cells) / len(cells)) and low < gap < high
+    difference, low, high = result.difference
+    assert difference == pytest.approx(result.gaps[0][0] - result.gaps[1][0]) and low < difference < high
     assert compare_gaps(first, second, "object_texture", (PICK_PLACE, PICK_PLACE)) == result  # deterministic
 
 
 def test_a_study_against_itself_differs_by_nothing_and_a_large_effect_is_resolved():
     same = compare_gaps(_study(36, 20), _study(36, 20), "light", (PICK_PLACE, PICK_PLACE))
-    assert same.difference == 0.0 and same.difference_interval[0] < 0 < same.difference_interval[1]
+    assert same.difference[0] == 0.0 and same.difference[1] < 0 < same.difference[2]
     large = compare_gaps(_study(36, 4), _study(36, 34), "light", (PICK_PLACE, PICK_PLACE))
-    assert large.difference == pytest.approx(0.75) and large.difference_interval[0] > 0.4
+    assert large.difference[0] == pytest.approx(0.75) and large.difference[1] > 0.4
+    reverse = compare_gaps(_study(36, 34), _study(36, 4), "light", (PICK_PLACE, PICK_PLACE))
+    assert reverse.difference[0] == pytest.approx(-0.75) and reverse.difference[2] < -0.4  # first minus second
     only_shared = compare_gaps(_study(36, 4), _study(36, 34, seeds=(1, 2, 3)), "light", (PICK_PLACE, PICK_PLACE))
     assert only_shared.seeds == (1, 2)
 
@@ -59,15 +61,25 @@ def test_bad_input_is_refused_naming_the_choices():
         compare_gaps(two_n, study, "light", (PICK_PLACE, PICK_PLACE))
 
 
-def test_the_script_prints_the_difference_findings_quotes_and_refuses_in_one_line():
+# The commands docs/findings.md quotes (first folder, second folder, extra flags), with what each prints last.
+QUOTED = [
+    ("f7_object_texture_168px", "f1_ordering", ["--factor=object_texture"], "+0.092 [-0.067, +0.250]"),
+    ("f7_object_texture_colours", "f7_object_texture_images", ["--factor=object_texture"], "+0.075 [-0.200, +0.325]"),
+    ("f8_out_of_domain_language", "f8_out_of_domain", ["--factor=floor_texture", "--method=bc_lang",
+     "--second-method=bc"], "+0.175 [-0.101, +0.450]"),
+]  # fmt: skip
+
+
+def test_the_script_prints_the_differences_findings_quotes_and_refuses_in_one_line():
     script = [sys.executable, str(ROOT / "scripts" / "compare_gaps.py")]
+    findings = " ".join((ROOT / "docs" / "findings.md").read_text().split())  # line breaks as spaces
+    for a, b, flags, printed in QUOTED:
+        command = [*script, str(RESULTS / a), str(RESULTS / b), "--task=pick-place", *flags]
+        proc = subprocess.run(command, capture_output=True, text=True, timeout=120)
+        assert proc.returncode == 0, proc.stderr
+        assert proc.stdout.strip().splitlines()[-1] == f"difference (first minus second): {printed}"
+        assert printed in findings and f"docs/results/{a} docs/results/{b}" in findings, a
     folders = [str(RESULTS / "f7_object_texture_168px"), str(RESULTS / "f1_ordering")]
-    proc = subprocess.run([*script, *folders, "--factor=object_texture", "--task=pick-place"], capture_output=True,
-                          text=True, timeout=120)  # fmt: skip
-    assert proc.returncode == 0, proc.stderr
-    last = proc.stdout.strip().splitlines()[-1]
-    assert last == "difference: +0.092 [-0.067, +0.250]"
-    assert last.split(": ")[1] in (ROOT / "docs" / "findings.md").read_text()
     bad = subprocess.run([*script, *folders, "--factor=gravity", "--task=pick-place"], capture_output=True,
                          text=True, timeout=120)  # fmt: skip
     assert (

@@ -263,6 +263,7 @@ def test_every_refusal_leaves_the_existing_dataset_untouched(dataset, capsys):
         ([], 1, "already complete with these settings"),
         (["--mode=append", "--cameras=side"], 1, "cannot append"),
         (["--mode=append", "--use_videos=true"], 1, "use_videos: False -> True"),
+        (["--mode=append", "--quality=lod"], 1, "quality: 'fast' -> 'lod'"),  # lod and fast frames never mix
     ]
     for extra, status, expected in refusals:
         code, err = cli_refusal([*same, *extra], capsys)

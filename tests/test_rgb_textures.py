@@ -154,6 +154,10 @@ def test_lerobot_env_config_takes_the_share_and_a_dataset_keeps_its_own(tmp_path
     old = _fake_dataset(tmp_path / "old", rgb_fraction=0.0, data_version=2)
     env_cfg = FactorWorldEnvConfig(task="door-open", dataset_root=str(old), shifts=["table_texture"], n_test_envs=4)
     assert env_cfg.sampling.rgb_fraction == 0.0
+    # a side-car that does not record the cameras, image size or quality: the env's defaults, and any given is kept
+    assert (env_cfg.cameras, env_cfg.image_size, env_cfg.quality) == ("front", 84, "fast")
+    given = FactorWorldEnvConfig(task="door-open", dataset_root=str(old), image_size=128, quality="lod")
+    assert (given.image_size, given.quality) == (128, "lod")
     shifted = env_cfg.suites("door-open")["table_texture"]
     assert not any(c.factors.table_texture.startswith("rgb:") for c in shifted)
     with pytest.raises(ValueError, match="disagrees with dataset"):  # a share given must agree with the data's

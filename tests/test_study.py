@@ -465,7 +465,7 @@ def test_changing_one_setting_changes_only_the_steps_that_depend_on_it(tmp_path)
 @TOY_GROUP
 @pytest.mark.slow
 def test_dataset_gives_the_training_condition_and_mismatches_are_refused(toy, tmp_path):
-    from lerobot_factorworld.adapters.env_config import FactorWorldEnvConfig
+    from lerobot_factorworld.adapters.env_config import LEROBOT_IMAGE_FEATURE, FactorWorldEnvConfig
     from lerobot_factorworld.protocol.sampling import sample_configs
     from lerobot_factorworld.protocol.sidecar import SIDECAR
     from lerobot_factorworld.study.plan import make_plan
@@ -491,6 +491,11 @@ def test_dataset_gives_the_training_condition_and_mismatches_are_refused(toy, tm
     assert FactorWorldEnvConfig(task="handle-press", dataset_root=str(lod)).gym_kwargs["quality"] == "lod"
     with pytest.raises(ValueError, match="quality='fast' but the dataset has 'lod'"):
         FactorWorldEnvConfig(task="handle-press", dataset_root=str(lod), quality="fast")
+    # LeRobot's observation renders its own view (corner2, 480 px, Meta-World's quality) of the dataset's environments
+    lerobot = FactorWorldEnvConfig(task="handle-press", dataset_root=str(lod), obs="lerobot_metaworld")
+    assert (lerobot.quality, lerobot.n_train_envs) == ("full", 2) and lerobot.features[LEROBOT_IMAGE_FEATURE].shape[
+        0
+    ] == 480
     wrong_settings = ({"n_train_envs": 5}, {"seed": 1}, {"train_factors": ["light"]}, {"quality": "full"})
     for wrong in (*wrong_settings, {"image_size": 84}, {"cameras": "top"}, {"cameras": "front,top"}):
         with pytest.raises(ValueError, match="disagrees with dataset"):
@@ -582,6 +587,7 @@ def test_a_study_reuses_another_studys_finished_steps_by_key(toy, tmp_path):
 
 
 @TOY_GROUP
+@pytest.mark.slow
 def test_a_batched_evaluation_is_its_own_step_and_runs_vectorised(toy, tmp_path):
     """``eval.batch_size: 2`` on N = 1 of the toy, reusing its folder: the collection and training are linked, but
     both evaluations run anew (a batch changes the actions' last bits, so it is in their key) in one batch of 2."""

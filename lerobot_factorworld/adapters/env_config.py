@@ -205,7 +205,9 @@ class FactorWorldEnvConfig(EnvConfig):
             raise ValueError(f"configs_path {path} holds no configuration for task(s) {', '.join(missing)}")
 
     def _resolve_train_condition(self) -> None:
-        """Fill N, factors, seed and sampling from ``dataset_root`` (refusing disagreements) or the defaults."""
+        """Fill N, factors, seed and sampling from ``dataset_root`` (refusing disagreements) or the defaults; with
+        ``obs=factorworld`` also the cameras, image size and quality its frames were rendered with (LeRobot's
+        observation fixes its own: a LeRobot checkpoint evaluated on a dataset's environments keeps it)."""
         if self.configs_path and self.dataset_root:
             raise ValueError(
                 "give dataset_root or configs_path, not both: each defines the training environments "
@@ -220,22 +222,23 @@ class FactorWorldEnvConfig(EnvConfig):
             return
         dataset = read_dataset_condition(self.dataset_root)
         explicit_sampling = None if self.sampling == SamplingOptions() else self.sampling
-        check_against_dataset(
-            dataset,
-            {
-                "n_train_envs": self.n_train_envs,
-                "train_factors": self.train_factors,
-                "seed": self.seed,
-                "sampling": explicit_sampling,
-                "quality": self.quality,
-                "cameras": None if self.cameras is None else check_cameras(self.cameras),
-                "image_size": self.image_size,
-            },
-        )
+        requested = {
+            "n_train_envs": self.n_train_envs,
+            "train_factors": self.train_factors,
+            "seed": self.seed,
+            "sampling": explicit_sampling,
+        }
+        own_frames = self.obs == FACTORWORLD_OBS  # the dataset's frames are what this observation renders
+        if own_frames:
+            cameras = None if self.cameras is None else check_cameras(self.cameras)
+            requested.update(quality=self.quality, cameras=cameras, image_size=self.image_size)
+        check_against_dataset(dataset, requested)
         for name in self.task_names:
             dataset.train_configs(name)  # raises when the dataset holds no environment of this task
         self.n_train_envs, self.train_factors, self.seed = dataset.n_envs, list(dataset.factors), dataset.seed
         self.sampling = dataset.sampling
+        if not own_frames:
+            return
         if dataset.quality is not None:
             self.quality = dataset.quality
         if dataset.cameras is not None:

@@ -365,17 +365,20 @@ def _check_data_version(recorded: dict | None, what: str, fix: str) -> None:
 
 
 # Settings that fix the dataset's features: LeRobot can only merge datasets that agree on them.
-SCHEMA_SETTINGS = ("cameras", "image_size", "use_videos")
+# What an appended collection must share: the features (LeRobot's ``aggregate_datasets`` needs them identical)
+# and the render quality (the side-car records one for the whole dataset, and evaluation renders it).
+SCHEMA_SETTINGS = ("cameras", "image_size", "use_videos", "quality")
 
 
 def _check_appendable(old: dict, new: dict, root: Path) -> None:
-    """Appending merges with LeRobot's ``aggregate_datasets``, which needs identical features: check now,
-    not after the collection."""
-    old_schema = {k: split_list(old.get(k)) if k == "cameras" else old.get(k) for k in SCHEMA_SETTINGS}
-    new_schema = {k: split_list(new[k]) if k == "cameras" else new[k] for k in SCHEMA_SETTINGS}
+    """Check now, not after the collection, that the new frames can join the old (``SCHEMA_SETTINGS``); a side-car
+    that does not record its quality is taken at its word for the rest."""
+    keys = [k for k in SCHEMA_SETTINGS if k != "quality" or "quality" in old]
+    old_schema = {k: split_list(old.get(k)) if k == "cameras" else old.get(k) for k in keys}
+    new_schema = {k: split_list(new[k]) if k == "cameras" else new[k] for k in keys}
     if old_schema != new_schema:
         raise FileExistsError(
-            f"cannot append to {root}: its frames have other features ({_settings_diff(old_schema, new_schema)}); "
+            f"cannot append to {root}: its frames were made otherwise ({_settings_diff(old_schema, new_schema)}); "
             f"nothing was changed. Appending needs the same {', '.join(SCHEMA_SETTINGS)}"
         )
 

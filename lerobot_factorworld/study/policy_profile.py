@@ -41,8 +41,8 @@ class ProfileEnv:
     Attributes:
         obs: ``factorworld`` (``cameras`` at ``image_size``, 8-number state) or ``lerobot_metaworld`` (LeRobot's
             ``--env.type=metaworld`` observation: docs/lerobot_metaworld.md).
-        cameras: Comma-separated cameras (``factorworld`` only; default: the env's, ``front``).
-        image_size: Square image side in pixels (``factorworld`` only; default: the env's, 84).
+        cameras: Comma-separated cameras (``factorworld`` only; default: the dataset's, else ``front``).
+        image_size: Square image side in pixels (``factorworld`` only; default: the dataset's, else 84).
     """
 
     obs: str = FACTORWORLD_OBS
@@ -63,8 +63,9 @@ class ProfileConfig:
         radius_factors: Factors of the radius sweep (``camera_pos``, ``table_pos``).
         radius_widths: Widths of the sweep (narrow / medium / wide).
         dataset_root: The Factor World dataset the checkpoint was trained on: ``train`` is then its training
-            environments (N, factors, seed and sampling read from its ``meta/factorworld.json``; settings given
-            as well must agree). Default: the dataset the checkpoint's ``train_config.json`` names, when it is a
+            environments (N, factors, seed and sampling read from its ``meta/factorworld.json``, and with
+            ``env.obs=factorworld`` its cameras and image size; settings given as well must agree; a dataset
+            rendered at another quality than the study renders is refused). Default: the dataset the checkpoint's ``train_config.json`` names, when it is a
             Factor World dataset on this machine (``factorworld collect`` + ``lerobot-train``); otherwise the
             defaults below.
         n_train_envs: Environments of the unshifted ``train`` condition (default 5, or 1 with

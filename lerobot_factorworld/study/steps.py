@@ -4,8 +4,8 @@
 A step's key hashes its kind, its inputs and the keys of the steps it depends on, so a change to one
 setting changes the keys of exactly the steps that depend on it. Inputs hold what changes results
 (settings, the versions of the packages that compute them, the dataset format, weight files' content);
-settings documented not to change results (workers, evaluation batch size and threads, where a weights
-file lies) travel in ``meta["run"]`` instead. Each step works in ``<study>/steps/<kind>/<key>/`` and
+settings documented not to change results (workers, evaluation threads, where a weights file lies)
+travel in ``meta["run"]`` instead; an evaluation's batch size is in its inputs when above 1. Each step works in ``<study>/steps/<kind>/<key>/`` and
 counts as done only once its ``result.json`` is written (atomically, last): an interrupted step is
 redone, a finished one is never redone. Results name their files relative to the study folder, so a
 moved study folder still resumes. Every result records the code that made it (``provenance``:
@@ -114,7 +114,7 @@ class Step:
 
     @property
     def run(self) -> dict[str, Any]:
-        """How to run this step (worker count, batch size, threads, paths): never changes its results."""
+        """How to run this step (worker count, threads, paths): never changes its results."""
         return self.meta.get(RUN, {})
 
     def folder(self, study_dir: str | Path) -> Path:
