@@ -184,9 +184,12 @@ def test_pairs_are_counted_against_the_papers_band_per_task():
     assert hard.mean_interaction == pytest.approx((-0.1 - 0.5 - 0.5) / 3)
     # no episode counts: nothing to resample, so the interval is the point itself
     assert hard.interaction_interval == pytest.approx((hard.mean_interaction, hard.mean_interaction))
+    assert easy.within_interval == (3, 3) and hard.within_interval == (0, 0)
     counted = [{**r, "episodes": 20} for r in rows]  # 20 episodes per cell: an interval around the point
     low, high = pair_bands(counted, "bc", 0.06)["hard"].interaction_interval
     assert low < hard.mean_interaction < high and high - low > 0.1
+    low, high = pair_bands(counted, "bc", 0.06)["easy"].within_interval  # resampling moves metrics out of the band
+    assert low < 3 and high == 3
     assert pair_bands(rows, "other", 0.06) == {}
 
 

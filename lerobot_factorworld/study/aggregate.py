@@ -136,6 +136,7 @@ class PairBand:
     above: int
     mean_interaction: float
     interaction_interval: tuple[float, float] = (math.nan, math.nan)
+    within_interval: tuple[float, float] = (math.nan, math.nan)  # of the count ``within`` (the task's pair_summary)
 
 
 def pair_bands(rows: Sequence[dict], method: str, tolerance: float) -> dict[str, PairBand]:
@@ -153,12 +154,14 @@ def pair_bands(rows: Sequence[dict], method: str, tolerance: float) -> dict[str,
     intervals = task_interactions(rows, method)
     for task in dict.fromkeys(task for task, _ in metrics):
         means = [float(np.mean(v)) for (t, _), v in metrics.items() if t == task]
+        summary_of_task = pair_summary([r for r in rows if r["task"] == task], method, tolerance)
         out[task] = PairBand(
             within=sum(abs(m) <= tolerance for m in means),
             below=sum(m < -tolerance for m in means),
             above=sum(m > tolerance for m in means),
             mean_interaction=float(np.mean(interactions[task])) if interactions[task] else math.nan,
             interaction_interval=intervals.get(task, (math.nan, math.nan)),
+            within_interval=summary_of_task.within_per_cell[1:] if summary_of_task else (math.nan, math.nan),
         )
     return out
 

@@ -439,14 +439,21 @@ def _pairs_section(cfg: StudyConfig, rows: list[dict]) -> list[str]:
         lines += [
             f"Per task ({first}, per-cell metric averaged over N and seeds): "
             + "; ".join(
-                f"{task} {b.within} of {b.within + b.below + b.above} within ±{tol:.0%} ({b.below} below, "
-                f"{b.above} above; mean interaction {b.mean_interaction:+.3f} {ci(*b.interaction_interval)})"
+                f"{task} {b.within} of {b.within + b.below + b.above} within ±{tol:.0%} (count's 95% interval "
+                f"{_count_range(b.within_interval)}; {b.below} below, {b.above} above; mean interaction "
+                f"{b.mean_interaction:+.3f} {ci(*b.interaction_interval)})"
                 for task, b in bands.items()
             )
             + ".",
             "",
         ]
     return lines
+
+
+def _count_range(interval: tuple[float, float]) -> str:
+    """A count's 95% interval as ``1-9`` (``n/a`` without one)."""
+    low, high = interval
+    return "n/a" if math.isnan(low) or math.isnan(high) else f"{low:.0f}-{high:.0f}"
 
 
 def _radius_section(cfg: StudyConfig, rows: list[dict]) -> list[str]:
