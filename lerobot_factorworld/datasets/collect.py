@@ -364,7 +364,6 @@ def _check_data_version(recorded: dict | None, what: str, fix: str) -> None:
         )
 
 
-# Settings that fix the dataset's features: LeRobot can only merge datasets that agree on them.
 # What an appended collection must share: the features (LeRobot's ``aggregate_datasets`` needs them identical)
 # and the render quality (the side-car records one for the whole dataset, and evaluation renders it).
 SCHEMA_SETTINGS = ("cameras", "image_size", "use_videos", "quality")
