@@ -7,6 +7,7 @@ identical: ``results.csv``, every checkpoint's files and every dataset's files, 
 
     MUJOCO_GL=egl .venv/bin/python scripts/bench_study.py            # about 3 minutes on 2 cores
     MUJOCO_GL=egl .venv/bin/python scripts/bench_study.py --quick    # the smoke test's scale
+    MUJOCO_GL=egl .venv/bin/python scripts/bench_study.py --quality lod   # the grid at the lod quality, both ways
 
 Target: a ratio >= 2 on 2 cores with identical results. The last line is ``ratio: <float>``.
 """
@@ -115,10 +116,13 @@ def main() -> None:
     parser.add_argument("--quick", action="store_true", help="the smallest grid (a smoke test, not a measurement)")
     parser.add_argument("--keep", default="", help="keep the two study folders under this folder")
     parser.add_argument("--profile", action="store_true", help="also print each way's `--profile` table")
+    parser.add_argument("--quality", default="fast", help="the grid's render quality (collect.quality: fast, lod)")
     args = parser.parse_args()
     setup_headless_gl()
     add_repo_to_path()
     grid = {**GRID, **QUICK} if args.quick else dict(GRID)
+    if args.quality != "fast":  # both ways at that quality: other pixels than the fixed grid's, so other results
+        grid["collect"] = {**grid["collect"], "quality": args.quality}
     base = Path(args.keep) if args.keep else Path(tempfile.mkdtemp(prefix="bench_study_"))
     load_start = os.getloadavg()
     seconds = {}

@@ -618,6 +618,41 @@ def test_a_batched_evaluation_is_its_own_step_and_runs_vectorised(toy, tmp_path)
     assert sorted(r["condition"] for r in rows) == ["light", "train"] and all(r["episodes"] == "2" for r in rows)
 
 
+@TOY_GROUP
+@pytest.mark.slow
+def test_a_study_collects_and_evaluates_at_the_quality_it_names(toy, tmp_path, monkeypatch):
+    """``collect.quality: lod`` on N = 1 of the toy: new keys for every step (other pixels), the dataset records
+    lod, every evaluation renders its scenes at lod, and the report says so; the toy's default keys hold none."""
+    from lerobot_factorworld.envs import runtime
+    from lerobot_factorworld.study import runner
+    from lerobot_factorworld.study.executors import InlineExecutor
+    from lerobot_factorworld.study.plan import make_plan
+    from lerobot_factorworld.study.steps import read_result
+
+    cfg, _ = toy
+    assert all("quality" not in s.inputs for s in make_plan(cfg).of_kind("collect"))
+    narrow, _ = _toy_config(tmp_path / "lod", n_train_envs="[1]", factors="[light]")
+    lod = replace(narrow, reuse_from=[cfg.out_dir], collect=replace(narrow.collect, quality="lod"))
+    qualities = []  # every scene built, in this process: the steps run inline
+    build = runtime.build_spec
+
+    def recording_build(task, factors, cameras, quality, image_size):
+        qualities.append(quality)
+        return build(task, factors, cameras, quality, image_size)
+
+    monkeypatch.setattr(runtime, "build_spec", recording_build)
+    monkeypatch.setattr(runner, "make_executor", lambda kind, study_dir, *a: InlineExecutor(study_dir, a[-1]))
+    outcome = runner.run_study(lod, command="lod")
+    assert not outcome.failed, outcome.failed
+    assert outcome.ran == {"collect": 1, "train": 1, "eval": 2}  # nothing of the toy's (fast) is reused
+    collect = make_plan(lod).of_kind("collect")[0]
+    assert collect.inputs["quality"] == "lod"
+    sidecar = json.loads((Path(read_result(collect, lod.out_dir)["root"]) / "meta" / "factorworld.json").read_text())
+    assert sidecar["settings"]["quality"] == "lod"
+    assert qualities and set(qualities) == {"lod"}, qualities  # collection and both evaluations
+    assert "rendered at quality lod" in outcome.report.read_text()
+
+
 # --- command line -------------------------------------------------------------------------------
 
 

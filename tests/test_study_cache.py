@@ -87,6 +87,21 @@ def test_eval_key_ignores_threads_holds_a_batch_above_one_and_train_ignores_n_te
     assert _eval_keys(cfg)[(1, "train")] != keys[(1, "train")]  # other episodes: another evaluation
 
 
+def test_a_render_quality_other_than_fast_is_in_every_key_and_fast_keeps_them():
+    from lerobot_factorworld.study.inputs import CollectInputs
+
+    cfg = _cfg()
+    assert all("quality" not in s.inputs for s in make_plan(cfg).of_kind("collect"))  # fast: keys as before
+    lod = replace(cfg, collect=replace(cfg.collect, quality="lod"))
+    for kind in ("collect", "train", "eval"):
+        assert not _keys(lod, kind) & _keys(cfg, kind), kind
+    inputs = CollectInputs.from_dict(make_plan(lod).of_kind("collect")[0].inputs)
+    assert inputs.quality == "lod" and inputs.environments().quality == "lod"  # a given checkpoint's too
+    assert inputs.environments("lerobot_metaworld").quality is None  # LeRobot's view keeps Meta-World's quality
+    with pytest.raises(ValueError, match="unknown collect.quality 'ultra'; valid: fast, full, lod"):
+        replace(cfg.collect, quality="ultra")
+
+
 def test_eval_device_is_a_setting_in_the_eval_key_only():
     cfg = _cfg()
     assert cfg.eval.device == "cpu"

@@ -20,6 +20,7 @@ from typing import Any
 
 import draccus
 
+from ..core.checks import check_choice
 from ..core.io import atomic_write_json
 from ..datasets.hub import check_hub_repo_id
 from ..envs.lerobot_obs import FACTORWORLD_OBS, LEROBOT_METAWORLD_OBS, check_lerobot_task, check_obs_mode
@@ -27,6 +28,7 @@ from ..factors.registry import PAPER_STUDY_FACTORS, WIDTHS, check_task_support, 
 from ..families import all_families, condition_family, family_of
 from ..protocol.conditions import PAIR_SEPARATOR, condition_name, parse_shift
 from ..protocol.sampling import DEFAULT_RGB_FRACTION, SamplingOptions
+from ..scene.build import QUALITIES
 from ..tasks import get_task
 from .checkpoint import checkpoint_setting
 from .inputs import EPOCHS_OVER, OWN_FRAMES
@@ -273,6 +275,10 @@ class CollectSettings:
             ``SamplingOptions.rgb_fraction``, the paper's images and colours as docs/factors.md reads it).
         n_objects: Objects on the table per scene, for the task families that read it (their
             ``sampling_options``; ``None``: the sampling default); refused for other tasks.
+        quality: Render quality of the demonstrations and so of every evaluation on their environments
+            (``fast``, ``lod``: simplified robot meshes, about 2x faster frames, slightly other pixels; ``full``:
+            Meta-World's shadows, about 7x slower; docs/factors.md). In the collection's key when not ``fast``.
+            The cost model assumes ``fast``.
         workers: Worker processes of one collection.
     """
 
@@ -287,10 +293,12 @@ class CollectSettings:
     n_distractors: int = 1
     rgb_fraction: float | None = None
     n_objects: int | None = None
+    quality: str = "fast"
     workers: int = 1
 
     def __post_init__(self) -> None:
         self.demos_per_task = per_task_setting("collect.demos_per_task", self.demos_per_task)
+        check_choice("collect.quality", self.quality, QUALITIES)
         if self.rgb_fraction is not None:
             try:
                 SamplingOptions(rgb_fraction=self.rgb_fraction)

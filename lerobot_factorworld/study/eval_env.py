@@ -25,6 +25,8 @@ def env_config(
     shifted = {} if is_train else {"n_test_envs": n_test_envs}
     # LeRobot's observation fixes its camera and image size (the config refuses them)
     view = {} if env.obs == LEROBOT_METAWORLD_OBS else {"cameras": env.cameras, "image_size": env.image_size}
+    if env.quality is not None:  # unset: the observation's default (a dataset's own: read from it)
+        view["quality"] = env.quality
     if data_root is not None:
         train = {"dataset_root": data_root}
     else:

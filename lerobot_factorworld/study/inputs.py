@@ -20,6 +20,11 @@ from ..protocol.conditions import TRAIN_SUITE
 from ..protocol.sampling import SamplingOptions
 
 
+def _without_unset(out: dict[str, Any], optional: frozenset[str]) -> dict[str, Any]:
+    """``out`` without the optional entries left unset (None), so that adding one keeps every earlier key."""
+    return {k: v for k, v in out.items() if k not in optional or v is not None}
+
+
 def _from_dict(cls, data: Mapping[str, Any], extra: str | None = None):
     """``cls(**data)``, refusing unknown names (except into ``extra``) and naming missing ones."""
     names = {f.name for f in fields(cls) if f.name != extra}
@@ -38,7 +43,7 @@ def _from_dict(cls, data: Mapping[str, Any], extra: str | None = None):
 class CollectInputs:
     """One dataset of scripted demonstrations (``factorworld collect``)."""
 
-    OPTIONAL: ClassVar[frozenset[str]] = frozenset()
+    OPTIONAL: ClassVar[frozenset[str]] = frozenset({"quality"})
 
     task: str
     n_envs: int
@@ -56,12 +61,13 @@ class CollectInputs:
     data_version: int
     versions: Mapping[str, str]
     family_options: Mapping[str, Any] = field(default_factory=dict)  # the task family's sampling options
+    quality: str | None = None  # the render quality when not the default (``fast``, None: left out of the key)
 
     def to_dict(self) -> dict[str, Any]:
         out = {f.name: getattr(self, f.name) for f in fields(self) if f.name != "family_options"}
         out.update(train_factors=list(self.train_factors), widths=dict(self.widths), versions=dict(self.versions))
         out.update(self.family_options)  # at the top level, as keys have always held them
-        return out
+        return _without_unset(out, self.OPTIONAL)
 
     @classmethod
     def from_dict(cls, data: Mapping[str, Any]) -> CollectInputs:
@@ -90,6 +96,7 @@ class CollectInputs:
             rgb_fraction=self.rgb_fraction,
             widths=dict(self.widths),
             family_options=dict(self.family_options),
+            quality=None if lerobot else self.quality,  # LeRobot's observation renders at Meta-World's own quality
         )
 
 
@@ -98,7 +105,7 @@ class EnvInputs:
     """The environments of an evaluation that has no dataset (a given checkpoint): the ``train`` condition is
     the N environments sampled as a collection with these settings would sample them, observed as ``obs``."""
 
-    OPTIONAL: ClassVar[frozenset[str]] = frozenset({"family_options"})
+    OPTIONAL: ClassVar[frozenset[str]] = frozenset({"family_options", "quality"})
 
     task: str
     n_envs: int
@@ -111,12 +118,13 @@ class EnvInputs:
     rgb_fraction: float
     widths: Mapping[str, str]
     family_options: Mapping[str, Any] = field(default_factory=dict)
+    quality: str | None = None  # as a collection's: None is the observation's default, left out of the key
 
     def to_dict(self) -> dict[str, Any]:
         out = {f.name: getattr(self, f.name) for f in fields(self)}
         out.update(train_factors=list(self.train_factors), widths=dict(self.widths))
         out["family_options"] = dict(self.family_options)
-        return out
+        return _without_unset(out, self.OPTIONAL)
 
     @classmethod
     def from_dict(cls, data: Mapping[str, Any]) -> EnvInputs:
@@ -158,7 +166,7 @@ class TrainInputs:
     def to_dict(self) -> dict[str, Any]:
         out = {f.name: getattr(self, f.name) for f in fields(self)}
         out.update(policy=dict(self.policy), extra_args=list(self.extra_args), versions=dict(self.versions))
-        return {k: v for k, v in out.items() if k not in self.OPTIONAL or v is not None}
+        return _without_unset(out, self.OPTIONAL)
 
     @classmethod
     def from_dict(cls, data: Mapping[str, Any]) -> TrainInputs:
@@ -202,7 +210,7 @@ class EvalInputs:
         out["versions"] = dict(self.versions)
         if self.environments is not None:
             out["environments"] = self.environments.to_dict()
-        return {k: v for k, v in out.items() if k not in self.OPTIONAL or v is not None}
+        return _without_unset(out, self.OPTIONAL)
 
     @classmethod
     def from_dict(cls, data: Mapping[str, Any]) -> EvalInputs:

@@ -33,7 +33,7 @@ from .aggregate import (
     success_per_condition_and_n,
     summary,
 )
-from .config import StudyConfig
+from .config import CollectSettings, StudyConfig
 from .inputs import MERGED_FRAMES
 from .metrics import BOOTSTRAP_RESAMPLES, BOOTSTRAP_SEED, rank_hardest_first, rerank, spearman
 from .paper import (
@@ -112,6 +112,7 @@ def render(
             else ""
         )
         + f"; textures a flat RGB colour with probability {cfg.collect.effective_rgb_fraction:g}, else an image"
+        + (f"; rendered at quality {cfg.collect.quality}" if cfg.collect.quality != CollectSettings.quality else "")
         + (f"; training {training} at batch {cfg.train.batch_size}." if cfg.trained_methods() else "."),
         *_given_lines(cfg, rows),
         *_extra_data_lines(cfg),

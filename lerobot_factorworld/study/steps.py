@@ -328,6 +328,7 @@ def collect_config(inputs: CollectInputs | dict[str, Any], root: Path, key: str,
         workers=workers,
         mode="new",
         sampling=sampling,
+        **({"quality": inputs.quality} if inputs.quality else {}),  # unset: the collector's default
     )
 
 
