@@ -19,7 +19,7 @@ from .envs.factor_env import FactorWorldEnv
 from .factors.registry import FACTORS, supported_factors
 from .factors.values import FactorValues, SceneConfig
 from .protocol.sampling import SamplingOptions, factor_rng, sample_factor
-from .scene.build import check_quality
+from .scene.build import DEFAULT_QUALITY, check_quality
 from .scene.cameras import check_cameras
 from .tasks import check_tasks, get_task
 
@@ -46,7 +46,7 @@ class ContactSheetConfig:
     n_values: int = 4
     image_size: int = 128
     camera: str = "front"
-    quality: str = "fast"
+    quality: str = DEFAULT_QUALITY
     seed: int = 0
     split: str = "eval"
     out: str = "outputs/contact_sheet.png"

@@ -116,7 +116,9 @@ def main() -> None:
     parser.add_argument("--quick", action="store_true", help="the smallest grid (a smoke test, not a measurement)")
     parser.add_argument("--keep", default="", help="keep the two study folders under this folder")
     parser.add_argument("--profile", action="store_true", help="also print each way's `--profile` table")
-    parser.add_argument("--quality", default="fast", help="the grid's render quality (collect.quality: fast, lod)")
+    parser.add_argument(
+        "--quality", default="fast", help="the grid's render quality (collect.quality: fast, lod or full)"
+    )
     args = parser.parse_args()
     setup_headless_gl()
     add_repo_to_path()

@@ -93,12 +93,14 @@ def test_train_defaults_to_the_checkpoints_own_dataset(bc_checkpoint, tiny_datas
         profile(bc_checkpoint, "--n_train_envs=5")
     with pytest.raises(ValueError, match="is not a Factor World dataset"):  # SettingError: one line at the CLI
         profile(bc_checkpoint, f"--dataset_root={tmp_path}")
-    lod = tmp_path / "lod"  # its side-car, as if rendered at lod: a study cannot, so refused
+    lod = tmp_path / "lod"  # its side-car, as if rendered at lod: the profile renders at lod too
     (lod / SIDECAR).parent.mkdir(parents=True)
     sidecar = json.loads((tiny_dataset / SIDECAR).read_text())
     (lod / SIDECAR).write_text(json.dumps({**sidecar, "settings": {**sidecar["settings"], "quality": "lod"}}))
-    with pytest.raises(ValueError, match="rendered at quality lod, which a profile cannot reproduce"):
-        profile(bc_checkpoint, f"--dataset_root={lod}")
+    at_lod = profile(bc_checkpoint, f"--dataset_root={lod}").study()
+    assert at_lod.collect.quality == "lod" and cfg.study().collect.quality == "fast"
+    given = next(s for s in make_plan(at_lod).of_kind("eval") if s.meta["condition"] == "train")
+    assert EvalInputs.from_dict(given.inputs).environments.quality == "lod"
     # no train_config.json (not trained by lerobot-train here): the defaults, 5 environments, the paper's factors
     flags = [f"--policy.path={factorworld_checkpoint}", "--task=pick-place", "--eval.n_test_envs=5"]
     untrained = parse_config(ProfileConfig, [*flags, "--eval.episodes=5", f"--out_dir={tmp_path / 'out'}"], "profile")

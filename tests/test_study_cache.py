@@ -12,6 +12,9 @@ from pathlib import Path
 import pytest
 
 from lerobot_factorworld.study.config import StudyConfig
+from lerobot_factorworld.study.cost import describe, fit_cost_model
+from lerobot_factorworld.study.eval_env import env_config
+from lerobot_factorworld.study.inputs import CollectInputs
 from lerobot_factorworld.study.plan import make_plan
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -87,17 +90,27 @@ def test_eval_key_ignores_threads_holds_a_batch_above_one_and_train_ignores_n_te
     assert _eval_keys(cfg)[(1, "train")] != keys[(1, "train")]  # other episodes: another evaluation
 
 
-def test_a_render_quality_other_than_fast_is_in_every_key_and_fast_keeps_them():
-    from lerobot_factorworld.study.inputs import CollectInputs
-
+def test_a_render_quality_other_than_fast_is_in_every_key_and_fast_keeps_them(tmp_path):
     cfg = _cfg()
     assert all("quality" not in s.inputs for s in make_plan(cfg).of_kind("collect"))  # fast: keys as before
     lod = replace(cfg, collect=replace(cfg.collect, quality="lod"))
     for kind in ("collect", "train", "eval"):
         assert not _keys(lod, kind) & _keys(cfg, kind), kind
     inputs = CollectInputs.from_dict(make_plan(lod).of_kind("collect")[0].inputs)
-    assert inputs.quality == "lod" and inputs.environments().quality == "lod"  # a given checkpoint's too
-    assert inputs.environments("lerobot_metaworld").quality is None  # LeRobot's view keeps Meta-World's quality
+    assert inputs.quality == "lod"
+    # a given checkpoint's environments (no dataset to read the quality from): lod, and LeRobot's view its own
+    assert env_config(inputs.environments()).quality == "lod"
+    assert (
+        env_config(CollectInputs.from_dict(make_plan(cfg).of_kind("collect")[0].inputs).environments()).quality
+        == "fast"
+    )
+    assert inputs.environments("lerobot_metaworld").quality is None
+    assert env_config(inputs.environments("lerobot_metaworld")).quality == "full"
+    # the cost model is fast's: a dry run says so, and it is never refitted from another quality
+    assert "(the model renders at fast; at lod frames cost about half as much" in describe(lod, make_plan(lod))
+    with pytest.raises(ValueError, match="this study renders at lod: fit it on a study at fast"):
+        fit_cost_model(lod, make_plan(lod), tmp_path, path=tmp_path / "model.json")
+    assert not (tmp_path / "model.json").exists()
     with pytest.raises(ValueError, match="unknown collect.quality 'ultra'; valid: fast, full, lod"):
         replace(cfg.collect, quality="ultra")
 

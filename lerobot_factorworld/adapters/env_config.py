@@ -40,7 +40,7 @@ from ..protocol.conditions import (
 from ..protocol.coverage import checked_vector_env
 from ..protocol.sampling import SamplingOptions
 from ..protocol.sidecar import check_against_dataset, read_dataset_condition
-from ..scene.build import check_quality
+from ..scene.build import DEFAULT_QUALITY, check_quality
 from ..scene.cameras import DEFAULT_CAMERAS as SCENE_DEFAULT_CAMERAS
 from ..scene.cameras import check_cameras
 from ..tasks import check_tasks, get_task
@@ -53,7 +53,7 @@ DEFAULT_N_TRAIN_ENVS = 5
 DEFAULT_ENV_SEED = 0
 DEFAULT_CAMERAS = ",".join(SCENE_DEFAULT_CAMERAS)  # the CLI spelling of the scene default
 DEFAULT_IMAGE_SIZE = 84
-DEFAULT_QUALITY = {FACTORWORLD_OBS: "fast", LEROBOT_METAWORLD_OBS: "full"}  # full: Meta-World's own pixels
+OBS_QUALITY = {FACTORWORLD_OBS: DEFAULT_QUALITY, LEROBOT_METAWORLD_OBS: "full"}  # full: Meta-World's own pixels
 LEROBOT_IMAGE_FEATURE = "pixels/top"  # LeRobot's metaworld config names its corner2 image so
 
 
@@ -122,7 +122,7 @@ class FactorWorldEnvConfig(EnvConfig):
         self._resolve_train_condition()  # with dataset_root: its cameras, image size and quality unless given
         self.cameras = DEFAULT_CAMERAS if self.cameras is None else self.cameras
         self.image_size = DEFAULT_IMAGE_SIZE if self.image_size is None else self.image_size
-        self.quality = DEFAULT_QUALITY[self.obs] if self.quality is None else self.quality
+        self.quality = OBS_QUALITY[self.obs] if self.quality is None else self.quality
         self._validate()
         if self.obs == LEROBOT_METAWORLD_OBS:
             self.features, self.features_map = lerobot_metaworld_features()

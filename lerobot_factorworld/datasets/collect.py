@@ -46,7 +46,7 @@ from ..factors.registry import PAPER_STUDY_FACTORS, check_factors
 from ..factors.values import SceneConfig
 from ..protocol.sampling import SamplingOptions, sample_configs
 from ..protocol.sidecar import SIDECAR
-from ..scene.build import check_quality
+from ..scene.build import DEFAULT_QUALITY, check_quality
 from ..scene.cameras import check_cameras
 from ..tasks import check_tasks
 from .card import write_card
@@ -106,7 +106,7 @@ class CollectConfig:
     seed: int = 0
     cameras: str = "front"
     image_size: int = 84
-    quality: str = "fast"
+    quality: str = DEFAULT_QUALITY
     action_noise: float = 0.002
     end_on_success: bool = True
     max_episode_steps: int | None = None

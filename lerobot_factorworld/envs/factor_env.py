@@ -54,7 +54,7 @@ from ..core.checks import check_image_size
 from ..factors.registry import FACTORS, factor_range, support_reason
 from ..factors.values import FactorValues, SceneConfig, to_jsonable
 from ..families import family_of
-from ..scene.build import DEFAULT_HEADLIGHT, QUALITIES, Quality
+from ..scene.build import DEFAULT_HEADLIGHT, DEFAULT_QUALITY, QUALITIES, Quality
 from ..scene.cameras import DEFAULT_CAMERAS, check_camera_names
 from ..tasks import get_task
 from .lerobot_obs import FACTORWORLD_OBS, LEROBOT_METAWORLD_OBS, LeRobotMetaworldObs, check_obs_mode
@@ -77,7 +77,7 @@ class FactorWorldEnv(gym.Env):
         *,
         cameras: Sequence[str] | str = DEFAULT_CAMERAS,
         image_size: int | tuple[int, int] = 84,
-        quality: Quality = "fast",
+        quality: Quality = DEFAULT_QUALITY,
         max_episode_steps: int | None = None,
         object_pos_width: str | None = None,
         terminate_on_success: bool = True,

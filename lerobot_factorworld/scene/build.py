@@ -32,6 +32,7 @@ from .lod import apply_lod
 
 Quality = Literal["fast", "full", "lod"]
 QUALITIES = ("fast", "full", "lod")
+DEFAULT_QUALITY: Quality = "fast"  # every default quality of Factor World's own observation derives from this one
 """Render qualities. A quality is part of a dataset's recorded settings, so data of different qualities never mix.
 
 * ``fast`` (the default): Meta-World's scene without shadows, multisampling or reflections, which dominate
@@ -90,7 +91,7 @@ def build_model(
     task: str | TaskSpec,
     factors: FactorValues,
     cameras: tuple[str, ...] = ("front",),
-    quality: Quality = "fast",
+    quality: Quality = DEFAULT_QUALITY,
     image_size: tuple[int, int] = (84, 84),
 ) -> mujoco.MjModel:
     """Compile the scene of ``task`` under ``factors`` (``image_size`` is (height, width))."""
@@ -101,7 +102,7 @@ def build_spec(
     task: str | TaskSpec,
     factors: FactorValues,
     cameras: tuple[str, ...] = ("front",),
-    quality: Quality = "fast",
+    quality: Quality = DEFAULT_QUALITY,
     image_size: tuple[int, int] = (84, 84),
 ) -> mujoco.MjSpec:
     task = task if isinstance(task, TaskSpec) else get_task(task)

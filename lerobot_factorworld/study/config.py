@@ -28,7 +28,7 @@ from ..factors.registry import PAPER_STUDY_FACTORS, WIDTHS, check_task_support, 
 from ..families import all_families, condition_family, family_of
 from ..protocol.conditions import PAIR_SEPARATOR, condition_name, parse_shift
 from ..protocol.sampling import DEFAULT_RGB_FRACTION, SamplingOptions
-from ..scene.build import QUALITIES
+from ..scene.build import DEFAULT_QUALITY, QUALITIES
 from ..tasks import get_task
 from .checkpoint import checkpoint_setting
 from .inputs import EPOCHS_OVER, OWN_FRAMES
@@ -293,7 +293,7 @@ class CollectSettings:
     n_distractors: int = 1
     rgb_fraction: float | None = None
     n_objects: int | None = None
-    quality: str = "fast"
+    quality: str = DEFAULT_QUALITY
     workers: int = 1
 
     def __post_init__(self) -> None:

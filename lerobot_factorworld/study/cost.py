@@ -33,6 +33,7 @@ from typing import Any
 from ..core import provenance
 from ..core.io import atomic_write_json
 from ..envs.lerobot_obs import LEROBOT_METAWORLD_OBS
+from ..scene.build import DEFAULT_QUALITY
 from ..tasks import get_task, step_limit
 from .checkpoint import GIVEN_CHECKPOINT, checkpoint_problems, local_folder, read_policy_config
 from .config import StudyConfig
@@ -281,6 +282,15 @@ def describe(cfg: StudyConfig, plan: Plan) -> str:
     )
     for name, hours in estimate(plan, todo, cfg.execution, model).items():
         lines.append(f"    {name:40s} {hours:10.1f} h" if hours >= 1 else f"    {name:40s} {hours * 60:10.0f} min")
+    if cfg.collect.quality != DEFAULT_QUALITY:
+        lines.append(
+            f"    (the model renders at {DEFAULT_QUALITY}; at {cfg.collect.quality} frames cost "
+            + (
+                "about half as much, docs/factors.md)"
+                if cfg.collect.quality == "lod"
+                else "about 7x more, docs/lerobot_metaworld.md)"
+            )
+        )
     lines += power_lines(cfg)  # what the plan's episode and seed counts can resolve
     missing = cfg.missing_weight_files()
     if missing:
@@ -351,7 +361,13 @@ def fit_constants(plan: Plan, study_dir: str | Path) -> dict[str, Any]:
 
 def fit_cost_model(cfg: StudyConfig, plan: Plan, study_dir: str | Path, path: Path = COST_MODEL_FILE) -> str:
     """Refit the constants from study ``cfg``'s finished steps, write them to ``path`` with where they were
-    fitted, and return what changed and the model's estimate of the whole study next to its wall time."""
+    fitted, and return what changed and the model's estimate of the whole study next to its wall time. Only from
+    a study rendered at the default quality: the model's frame costs are that quality's."""
+    if cfg.collect.quality != DEFAULT_QUALITY:
+        raise ValueError(
+            f"--fit_cost refits the model of {DEFAULT_QUALITY} rendering; this study renders at "
+            f"{cfg.collect.quality}: fit it on a study at {DEFAULT_QUALITY}"
+        )
     old = load_model(path) if Path(path).is_file() else load_model()
     model = fit_constants(plan, study_dir)
     run = last_run(study_dir) or {}

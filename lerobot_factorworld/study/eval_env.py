@@ -6,6 +6,7 @@ from __future__ import annotations
 
 from ..envs.lerobot_obs import LEROBOT_METAWORLD_OBS
 from ..protocol.conditions import TRAIN_SUITE
+from ..scene.build import DEFAULT_QUALITY
 from .inputs import CollectInputs, EnvInputs, EvalInputs
 
 
@@ -25,8 +26,8 @@ def env_config(
     shifted = {} if is_train else {"n_test_envs": n_test_envs}
     # LeRobot's observation fixes its camera and image size (the config refuses them)
     view = {} if env.obs == LEROBOT_METAWORLD_OBS else {"cameras": env.cameras, "image_size": env.image_size}
-    if env.quality is not None:  # unset: the observation's default (a dataset's own: read from it)
-        view["quality"] = env.quality
+    if env.obs != LEROBOT_METAWORLD_OBS:  # LeRobot's view renders at Meta-World's own quality (the env's default)
+        view["quality"] = DEFAULT_QUALITY if env.quality is None else env.quality
     if data_root is not None:
         train = {"dataset_root": data_root}
     else:

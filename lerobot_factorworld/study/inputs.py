@@ -2,7 +2,8 @@
 
 A step's key hashes ``to_dict()`` of its inputs (``Step.inputs``), so ``to_dict`` gives exactly the
 JSON the key has always hashed: the same names, and optional entries left out when unset (a family's
-sampling options for tasks of other families, ``n_test_envs`` for the ``train`` condition).
+sampling options for tasks of other families, ``n_test_envs`` for the ``train`` condition, a render ``quality``
+at the default, an evaluation's ``batch_size`` of one), so that adding one keeps every earlier key.
 ``from_dict`` is the one reader of a stored step's inputs: a missing or unknown entry is an error
 naming it, not a silent default.
 """

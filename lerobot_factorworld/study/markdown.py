@@ -10,7 +10,9 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 
 from ..core.provenance import UNKNOWN
+from ..envs.lerobot_obs import FACTORWORLD_OBS
 from ..protocol.conditions import TRAIN_SUITE
+from ..scene.build import DEFAULT_QUALITY
 from ..tasks import step_limit
 from .aggregate import (
     ALL_FACTORS,
@@ -33,7 +35,7 @@ from .aggregate import (
     success_per_condition_and_n,
     summary,
 )
-from .config import CollectSettings, StudyConfig
+from .config import StudyConfig
 from .inputs import MERGED_FRAMES
 from .metrics import BOOTSTRAP_RESAMPLES, BOOTSTRAP_SEED, rank_hardest_first, rerank, spearman
 from .paper import (
@@ -112,7 +114,7 @@ def render(
             else ""
         )
         + f"; textures a flat RGB colour with probability {cfg.collect.effective_rgb_fraction:g}, else an image"
-        + (f"; rendered at quality {cfg.collect.quality}" if cfg.collect.quality != CollectSettings.quality else "")
+        + (f"; rendered at quality {cfg.collect.quality}" if _renders_at_another_quality(cfg) else "")
         + (f"; training {training} at batch {cfg.train.batch_size}." if cfg.trained_methods() else "."),
         *_given_lines(cfg, rows),
         *_extra_data_lines(cfg),
@@ -449,6 +451,13 @@ def _pairs_section(cfg: StudyConfig, rows: list[dict]) -> list[str]:
             "",
         ]
     return lines
+
+
+def _renders_at_another_quality(cfg: StudyConfig) -> bool:
+    """Whether a scene of the study renders at a quality other than the default: a collection, or a given
+    checkpoint with Factor World's observation (LeRobot's renders at Meta-World's own)."""
+    renders = cfg.trained_methods() or any(m.obs == FACTORWORLD_OBS for m in cfg.given_methods())
+    return bool(renders) and cfg.collect.quality != DEFAULT_QUALITY
 
 
 def _count_range(interval: tuple[float, float]) -> str:

@@ -14,8 +14,9 @@ from ..core.fingerprint import file_fingerprint
 from ..datasets.version import DATA_VERSION
 from ..factors.registry import get_factor
 from ..protocol.conditions import TRAIN_SUITE
+from ..scene.build import DEFAULT_QUALITY
 from .checkpoint import GIVEN_CHECKPOINT, keyed_checkpoint
-from .config import RADII_M, CollectSettings, MethodConfig, StudyConfig, map_arg_paths, map_policy_paths
+from .config import RADII_M, MethodConfig, StudyConfig, map_arg_paths, map_policy_paths
 from .inputs import OWN_FRAMES, CollectInputs, EnvInputs, EvalInputs, TrainInputs
 from .steps import RUN, Step, versions
 
@@ -115,7 +116,7 @@ def _collect_step(cfg: StudyConfig, task: str, n: int, seed: int, widths: dict[s
         data_version=DATA_VERSION,
         versions=versions(),
         family_options=c.family_options_for(task),  # e.g. objects per scene, for the families that read them
-        quality=None if c.quality == CollectSettings.quality else c.quality,  # the default: keys as before
+        quality=None if c.quality == DEFAULT_QUALITY else c.quality,  # the default: keys as before
     )
     return Step("collect", inputs.to_dict(), (), {**cell, RUN: {"workers": c.workers}})
 

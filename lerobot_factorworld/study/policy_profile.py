@@ -14,6 +14,7 @@ from ..envs.lerobot_obs import FACTORWORLD_OBS
 from ..factors.registry import PAPER_STUDY_FACTORS, WIDTHS
 from ..families import family_of
 from ..protocol.sampling import SamplingOptions
+from ..scene.build import DEFAULT_QUALITY
 from .checkpoint import local_folder, read_policy_config, training_dataset
 from .config import CollectSettings, EvalSettings, MethodConfig, StudyConfig
 
@@ -64,8 +65,8 @@ class ProfileConfig:
         radius_widths: Widths of the sweep (narrow / medium / wide).
         dataset_root: The Factor World dataset the checkpoint was trained on: ``train`` is then its training
             environments (N, factors, seed and sampling read from its ``meta/factorworld.json``, and with
-            ``env.obs=factorworld`` its cameras and image size; settings given as well must agree; a dataset
-            rendered at another quality than the study renders is refused). Default: the dataset the checkpoint's ``train_config.json`` names, when it is a
+            ``env.obs=factorworld`` its cameras, image size and render quality; settings given as well must
+            agree). Default: the dataset the checkpoint's ``train_config.json`` names, when it is a
             Factor World dataset on this machine (``factorworld collect`` + ``lerobot-train``); otherwise the
             defaults below.
         n_train_envs: Environments of the unshifted ``train`` condition (default 5, or 1 with
@@ -117,7 +118,7 @@ class ProfileConfig:
     def _make_study(self) -> StudyConfig:
         # Deliberately here: the env config imports LeRobot (seconds); it resolves the train condition's
         # defaults for the observation and checks the task, cameras and image size as lerobot-eval would.
-        from ..adapters.env_config import DEFAULT_QUALITY, FactorWorldEnvConfig  # noqa: PLC0415
+        from ..adapters.env_config import FactorWorldEnvConfig  # noqa: PLC0415
 
         view = {"cameras": self.env.cameras, "image_size": self.env.image_size}
         if self.dataset_root is None and self.env.obs == FACTORWORLD_OBS:
@@ -133,11 +134,8 @@ class ProfileConfig:
         )
         if len(env.task_names) != 1:
             raise ValueError(f"factorworld profile takes one task, got {self.task!r}")
-        if env.quality != DEFAULT_QUALITY[env.obs]:  # a study renders each observation at its default quality
-            raise ValueError(
-                f"dataset {self.dataset_root} was rendered at quality {env.quality}, which a profile cannot reproduce; "
-                "evaluate the checkpoint with lerobot-eval --env.type=factorworld --env.dataset_root=<its dataset>"
-            )
+        # Factor World's observation renders at the dataset's quality; LeRobot's at Meta-World's own (the default)
+        own_quality = env.quality if env.obs == FACTORWORLD_OBS else DEFAULT_QUALITY
         name = self.policy.name or _default_name(self.policy.path)
         method = MethodConfig(name=name, checkpoint=self.policy.path, obs=self.env.obs)
         return StudyConfig(
@@ -152,7 +150,7 @@ class ProfileConfig:
             radius_factors=list(self.radius_factors),
             radius_widths=list(self.radius_widths),
             methods=[method],
-            collect=_collect_settings(env.task_names[0], env.cameras, env.image_size, env.sampling),
+            collect=_collect_settings(env.task_names[0], env.cameras, env.image_size, env.sampling, own_quality),
             eval=self.eval,
             workers=self.workers,
             dry_run=self.dry_run,
@@ -161,9 +159,11 @@ class ProfileConfig:
         )
 
 
-def _collect_settings(task: str, cameras: str, image_size: int, sampling: SamplingOptions) -> CollectSettings:
-    """The study settings that sample ``train``'s environments as ``sampling`` does (a dataset's, or the
-    defaults); sampling a study cannot express is refused in one line."""
+def _collect_settings(
+    task: str, cameras: str, image_size: int, sampling: SamplingOptions, quality: str = DEFAULT_QUALITY
+) -> CollectSettings:
+    """The study settings that sample ``train``'s environments as ``sampling`` does and render them at
+    ``quality`` (a dataset's, or the defaults); sampling a study cannot express is refused in one line."""
     defaults, widths = SamplingOptions(), dict(sampling.widths)
     object_pos_width = widths.pop("object_pos", CollectSettings.object_pos_width)
     other = [f"widths.{name}={width}" for name, width in widths.items()]
@@ -181,6 +181,7 @@ def _collect_settings(task: str, cameras: str, image_size: int, sampling: Sampli
         n_distractors=sampling.n_distractors,
         rgb_fraction=sampling.rgb_fraction,
         n_objects=sampling.n_objects if "n_objects" in family_of(task).sampling_options else None,
+        quality=quality,
     )
 
 

@@ -44,6 +44,7 @@ from ..envs.stages import STAGE_KEY
 from ..families import family_of
 from ..protocol.conditions import fingerprint
 from ..protocol.coverage import coverage
+from ..scene.build import DEFAULT_QUALITY
 from .checkpoint import GIVEN_CHECKPOINT, checkpoint_folder
 from .eval_env import eval_env_config
 from .inputs import MERGED_FRAMES, CollectInputs, EvalInputs, TrainInputs
@@ -328,7 +329,7 @@ def collect_config(inputs: CollectInputs | dict[str, Any], root: Path, key: str,
         workers=workers,
         mode="new",
         sampling=sampling,
-        **({"quality": inputs.quality} if inputs.quality else {}),  # unset: the collector's default
+        quality=DEFAULT_QUALITY if inputs.quality is None else inputs.quality,
     )
 
 
