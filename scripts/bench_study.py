@@ -123,8 +123,7 @@ def main() -> None:
     setup_headless_gl()
     add_repo_to_path()
     grid = {**GRID, **QUICK} if args.quick else dict(GRID)
-    if args.quality != "fast":  # both ways at that quality: other pixels than the fixed grid's, so other results
-        grid["collect"] = {**grid["collect"], "quality": args.quality}
+    grid["collect"] = {**grid["collect"], "quality": args.quality}  # both ways; another than fast: other results
     base = Path(args.keep) if args.keep else Path(tempfile.mkdtemp(prefix="bench_study_"))
     load_start = os.getloadavg()
     seconds = {}

@@ -282,7 +282,7 @@ def describe(cfg: StudyConfig, plan: Plan) -> str:
     )
     for name, hours in estimate(plan, todo, cfg.execution, model).items():
         lines.append(f"    {name:40s} {hours:10.1f} h" if hours >= 1 else f"    {name:40s} {hours * 60:10.0f} min")
-    if cfg.collect.quality != DEFAULT_QUALITY:
+    if cfg.collect.other_quality:
         lines.append(
             f"    (the model renders at {DEFAULT_QUALITY}; at {cfg.collect.quality} frames cost "
             + (
@@ -363,7 +363,7 @@ def fit_cost_model(cfg: StudyConfig, plan: Plan, study_dir: str | Path, path: Pa
     """Refit the constants from study ``cfg``'s finished steps, write them to ``path`` with where they were
     fitted, and return what changed and the model's estimate of the whole study next to its wall time. Only from
     a study rendered at the default quality: the model's frame costs are that quality's."""
-    if cfg.collect.quality != DEFAULT_QUALITY:
+    if cfg.collect.other_quality:
         raise ValueError(
             f"--fit_cost refits the model of {DEFAULT_QUALITY} rendering; this study renders at "
             f"{cfg.collect.quality}: fit it on a study at {DEFAULT_QUALITY}"

@@ -6,7 +6,6 @@ from __future__ import annotations
 
 from ..envs.lerobot_obs import LEROBOT_METAWORLD_OBS
 from ..protocol.conditions import TRAIN_SUITE
-from ..scene.build import DEFAULT_QUALITY
 from .inputs import CollectInputs, EnvInputs, EvalInputs
 
 
@@ -27,7 +26,7 @@ def env_config(
     # LeRobot's observation fixes its camera and image size (the config refuses them)
     view = {} if env.obs == LEROBOT_METAWORLD_OBS else {"cameras": env.cameras, "image_size": env.image_size}
     if env.obs != LEROBOT_METAWORLD_OBS:  # LeRobot's view renders at Meta-World's own quality (the env's default)
-        view["quality"] = DEFAULT_QUALITY if env.quality is None else env.quality
+        view["quality"] = env.render_quality
     if data_root is not None:
         train = {"dataset_root": data_root}
     else:

@@ -19,6 +19,7 @@ from ..envs.lerobot_obs import FACTORWORLD_OBS, LEROBOT_METAWORLD_OBS
 from ..envs.lerobot_obs import IMAGE_SIZE as LEROBOT_IMAGE_SIZE
 from ..protocol.conditions import TRAIN_SUITE
 from ..protocol.sampling import SamplingOptions
+from ..scene.build import DEFAULT_QUALITY
 
 
 def _without_unset(out: dict[str, Any], optional: frozenset[str]) -> dict[str, Any]:
@@ -63,6 +64,11 @@ class CollectInputs:
     versions: Mapping[str, str]
     family_options: Mapping[str, Any] = field(default_factory=dict)  # the task family's sampling options
     quality: str | None = None  # the render quality when not the default (``fast``, None: left out of the key)
+
+    @property
+    def render_quality(self) -> str:
+        """The quality its frames are rendered at (``quality``, or the default when unset)."""
+        return self.environments().render_quality
 
     def to_dict(self) -> dict[str, Any]:
         out = {f.name: getattr(self, f.name) for f in fields(self) if f.name != "family_options"}
@@ -120,6 +126,11 @@ class EnvInputs:
     widths: Mapping[str, str]
     family_options: Mapping[str, Any] = field(default_factory=dict)
     quality: str | None = None  # as a collection's: None is the observation's default, left out of the key
+
+    @property
+    def render_quality(self) -> str:
+        """The quality Factor World's observation renders at (LeRobot's renders at Meta-World's own)."""
+        return DEFAULT_QUALITY if self.quality is None else self.quality
 
     def to_dict(self) -> dict[str, Any]:
         out = {f.name: getattr(self, f.name) for f in fields(self)}

@@ -12,7 +12,6 @@ from pathlib import Path
 from ..core.provenance import UNKNOWN
 from ..envs.lerobot_obs import FACTORWORLD_OBS
 from ..protocol.conditions import TRAIN_SUITE
-from ..scene.build import DEFAULT_QUALITY
 from ..tasks import step_limit
 from .aggregate import (
     ALL_FACTORS,
@@ -457,7 +456,7 @@ def _renders_at_another_quality(cfg: StudyConfig) -> bool:
     """Whether a scene of the study renders at a quality other than the default: a collection, or a given
     checkpoint with Factor World's observation (LeRobot's renders at Meta-World's own)."""
     renders = cfg.trained_methods() or any(m.obs == FACTORWORLD_OBS for m in cfg.given_methods())
-    return bool(renders) and cfg.collect.quality != DEFAULT_QUALITY
+    return bool(renders) and cfg.collect.other_quality is not None
 
 
 def _count_range(interval: tuple[float, float]) -> str:

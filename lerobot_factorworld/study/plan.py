@@ -14,7 +14,6 @@ from ..core.fingerprint import file_fingerprint
 from ..datasets.version import DATA_VERSION
 from ..factors.registry import get_factor
 from ..protocol.conditions import TRAIN_SUITE
-from ..scene.build import DEFAULT_QUALITY
 from .checkpoint import GIVEN_CHECKPOINT, keyed_checkpoint
 from .config import RADII_M, MethodConfig, StudyConfig, map_arg_paths, map_policy_paths
 from .inputs import OWN_FRAMES, CollectInputs, EnvInputs, EvalInputs, TrainInputs
@@ -116,7 +115,7 @@ def _collect_step(cfg: StudyConfig, task: str, n: int, seed: int, widths: dict[s
         data_version=DATA_VERSION,
         versions=versions(),
         family_options=c.family_options_for(task),  # e.g. objects per scene, for the families that read them
-        quality=None if c.quality == DEFAULT_QUALITY else c.quality,  # the default: keys as before
+        quality=c.other_quality,  # the default is left out: keys as before
     )
     return Step("collect", inputs.to_dict(), (), {**cell, RUN: {"workers": c.workers}})
 

@@ -5,8 +5,9 @@ A step's key hashes its kind, its inputs and the keys of the steps it depends on
 setting changes the keys of exactly the steps that depend on it. Inputs hold what changes results
 (settings, the versions of the packages that compute them, the dataset format, weight files' content);
 settings documented not to change results (workers, evaluation threads, where a weights file lies)
-travel in ``meta["run"]`` instead; an evaluation's batch size is in its inputs when above 1. Each step works in ``<study>/steps/<kind>/<key>/`` and
-counts as done only once its ``result.json`` is written (atomically, last): an interrupted step is
+travel in ``meta["run"]`` instead; an evaluation's batch size is in its inputs when above 1. Each step works
+in ``<study>/steps/<kind>/<key>/`` and counts as done only once its ``result.json`` is written (atomically,
+last): an interrupted step is
 redone, a finished one is never redone. Results name their files relative to the study folder, so a
 moved study folder still resumes. Every result records the code that made it (``provenance``:
 commit, clean tree, source hash; ``core/provenance.py``), never in the key: the runner compares it with
@@ -44,7 +45,6 @@ from ..envs.stages import STAGE_KEY
 from ..families import family_of
 from ..protocol.conditions import fingerprint
 from ..protocol.coverage import coverage
-from ..scene.build import DEFAULT_QUALITY
 from .checkpoint import GIVEN_CHECKPOINT, checkpoint_folder
 from .eval_env import eval_env_config
 from .inputs import MERGED_FRAMES, CollectInputs, EvalInputs, TrainInputs
@@ -329,7 +329,7 @@ def collect_config(inputs: CollectInputs | dict[str, Any], root: Path, key: str,
         workers=workers,
         mode="new",
         sampling=sampling,
-        quality=DEFAULT_QUALITY if inputs.quality is None else inputs.quality,
+        quality=inputs.render_quality,
     )
 
 
