@@ -299,16 +299,16 @@ class CollectSettings:
     def __post_init__(self) -> None:
         self.demos_per_task = per_task_setting("collect.demos_per_task", self.demos_per_task)
         check_choice("collect.quality", self.quality, QUALITIES)
-
-    @property
-    def other_quality(self) -> str | None:
-        """``quality`` where it is not the default (what a collection's key holds), else ``None``."""
-        return None if self.quality == DEFAULT_QUALITY else self.quality
         if self.rgb_fraction is not None:
             try:
                 SamplingOptions(rgb_fraction=self.rgb_fraction)
             except ValueError as err:  # "rgb_fraction must be in [0, 1], got 2.0"
                 raise ValueError(f"collect.{err}") from None
+
+    @property
+    def other_quality(self) -> str | None:
+        """``quality`` where it is not the default (what a collection's key holds), else ``None``."""
+        return None if self.quality == DEFAULT_QUALITY else self.quality
 
     @property
     def effective_rgb_fraction(self) -> float:

@@ -7,8 +7,7 @@ setting changes the keys of exactly the steps that depend on it. Inputs hold wha
 settings documented not to change results (workers, evaluation threads, where a weights file lies)
 travel in ``meta["run"]`` instead; an evaluation's batch size is in its inputs when above 1. Each step works
 in ``<study>/steps/<kind>/<key>/`` and counts as done only once its ``result.json`` is written (atomically,
-last): an interrupted step is
-redone, a finished one is never redone. Results name their files relative to the study folder, so a
+last): an interrupted step is redone, a finished one is never redone. Results name their files relative to the study folder, so a
 moved study folder still resumes. Every result records the code that made it (``provenance``:
 commit, clean tree, source hash; ``core/provenance.py``), never in the key: the runner compares it with
 the current code to find steps made by other code (``runner.py``).
