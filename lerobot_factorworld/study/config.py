@@ -31,6 +31,7 @@ from ..protocol.sampling import DEFAULT_RGB_FRACTION, SamplingOptions
 from ..scene.build import DEFAULT_QUALITY, QUALITIES
 from ..tasks import get_task
 from .checkpoint import checkpoint_setting
+from .claim_config import ClaimConfig
 from .inputs import EPOCHS_OVER, OWN_FRAMES
 from .reuse import check_reuse_from
 from .steps import EXECUTIONS  # how steps run, never what they compute
@@ -441,6 +442,8 @@ class StudyConfig:
         reuse_from: Other studies' folders whose finished steps this study uses where the keys (the inputs)
             are the same, linked into ``steps/`` instead of run again (``study/reuse.py``): e.g. F3 and F5
             reuse F1's seed-0 collections, trainings and single-factor evaluations.
+        claims: The paper's claims this study tests (``claim_config.py``): the report decides each from its
+            intervals (``claims.py``). None: the paper's factor ordering over ``factors``.
     """
 
     name: str = "study"
@@ -471,9 +474,11 @@ class StudyConfig:
     push_to_hub: bool = False
     hub_repo_id: str | None = None
     reuse_from: list[str] = field(default_factory=list)
+    claims: list[ClaimConfig] = field(default_factory=list)
 
     def __post_init__(self) -> None:
         self.methods = [m if isinstance(m, MethodConfig) else MethodConfig(**m) for m in self.methods]
+        self.claims = [c if isinstance(c, ClaimConfig) else ClaimConfig(**c) for c in self.claims]
         self.reuse_from = [absolute_path(folder) for folder in self.reuse_from]  # steps run elsewhere
         self.validate()
 
@@ -521,6 +526,8 @@ class StudyConfig:
             raise ValueError("a study needs at least one task, one N (n_train_envs), one seed and one method")
         self._validate_conditions()
         self._validate_methods()
+        for claim in self.claims:
+            claim.validate([m.name for m in self.methods], self.tasks, self.shifted_factors(), self.pair_conditions())
         for factor in self.radius_factors:
             if factor not in RADIUS_FACTORS:
                 raise ValueError(f"the radius sweep applies to {', '.join(RADIUS_FACTORS)}, got {factor!r}")

@@ -34,6 +34,8 @@ from .aggregate import (
     success_per_condition_and_n,
     summary,
 )
+from .claims import ClaimVerdict, decide, study_claims
+from .claims_markdown import claims_section, ordering_sentence
 from .config import StudyConfig
 from .inputs import MERGED_FRAMES
 from .metrics import BOOTSTRAP_RESAMPLES, BOOTSTRAP_SEED, rank_hardest_first, rerank, spearman
@@ -137,7 +139,9 @@ def render(
     unequal = [r for r in rows if r["episodes"] % r["n_envs"] or r["envs_visited"] != r["n_envs"]]
     if unequal:
         lines += [f"**Coverage:** {len(unequal)} row(s) did not visit their environments equally.", ""]
-    lines += _ordering_section(cfg, rows)
+    verdicts = decide(study_claims(cfg), cfg, rows)
+    lines += _ordering_section(cfg, rows, verdicts)
+    lines += claims_section(verdicts)
     lines += family_sections(FAMILY_RESULTS)
     lines += _gap_table(cfg, rows)
     lines += _gap_against_n_section(cfg, rows)
@@ -214,7 +218,7 @@ def _given_lines(cfg: StudyConfig, rows: list[dict]) -> list[str]:
     ]
 
 
-def _ordering_section(cfg: StudyConfig, rows: list[dict]) -> list[str]:
+def _ordering_section(cfg: StudyConfig, rows: list[dict], verdicts: list[ClaimVerdict]) -> list[str]:
     if not cfg.factors:  # e.g. a profile of the `train` condition alone
         return []
     method = cfg.methods[0].name
@@ -258,12 +262,13 @@ def _ordering_section(cfg: StudyConfig, rows: list[dict]) -> list[str]:
         differ = [f for f in shared if abs(ours_r[f] - paper_r[f]) >= 1]
         if differ:
             lines.append(
-                f"Where they differ (ranks among the {len(shared)} shared factors, 1 = hardest): "
+                f"Point ranks that differ (among the {len(shared)} shared factors, 1 = hardest; ranks are not verdicts): "
                 + "; ".join(f"{f} is ranked {ours_r[f]:g} here and {paper_r[f]:g} in the paper" for f in differ)
                 + "."
             )
-        else:
-            lines.append("The ordering agrees with the paper's (no shared factor moves by a whole rank).")
+    sentence = ordering_sentence(verdicts)
+    if sentence:
+        lines.append(sentence)
     lines.append(PAPER_ORDERING)
     lines.append("")
     return lines + _resolved_factors(bootstrap, method, sorted(gaps, key=lambda f: ours.get(f, 99)))
@@ -278,8 +283,10 @@ def _resolved_factors(bootstrap: FactorGapBootstrap, method: str, hardest_first:
     lines = [
         f"### Which factors are resolved from each other ({method})",
         "",
-        "A factor's gap is resolved from another's when the 95% bootstrap interval of the difference of their mean "
-        "gaps (one bootstrap for all factors, so what their cells share is kept) excludes 0.",
+        "A factor's gap is resolved from another's here when the 95% bootstrap interval of the difference of their "
+        "mean gaps (one bootstrap for all factors, so what their cells share is kept) excludes 0. This table describes; "
+        "it is not corrected for the many comparisons and has no t-interval over seeds: the verdicts are in "
+        "*The paper's claims*.",
         "",
         "| factor (hardest first) | larger than (difference, 95% interval) | not resolved from |",
         "|---|---|---|",
