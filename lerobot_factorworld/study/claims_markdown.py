@@ -62,6 +62,9 @@ def _claim_cells(v: ClaimVerdict) -> tuple[str, str, str]:
         return "no data", "none", "the study has no rows for it"
     if len(v.comparisons) == 1:
         return _num(d.point), _interval(d), to_resolve(d)
+    if len({c.point for c in v.comparisons}) == 1:  # one statistic against two thresholds: a band
+        low, high = sorted(c.threshold for c in v.comparisons)
+        return f"{_num(d.point)} (the paper: between {low:+g} and {high:+g})", _interval(d), to_resolve(d)
     counts = {verdict: sum(c.verdict == verdict for c in v.comparisons) for verdict in (AGREES, DISAGREES)}
     estimate = (
         f"{counts[AGREES]} of {len(v.comparisons)} comparisons agree, {counts[DISAGREES]} disagree; "
