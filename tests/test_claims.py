@@ -8,9 +8,11 @@ from pathlib import Path
 
 import pytest
 
+from lerobot_factorworld.study.aggregate import method_rho_differences
 from lerobot_factorworld.study.claim_config import ClaimConfig
 from lerobot_factorworld.study.claims import AGREES, CAPPED, DISAGREES, NOT_RESOLVED, decide, study_claims
 from lerobot_factorworld.study.config import MethodConfig, StudyConfig
+from lerobot_factorworld.study.paper import PAPER_FACTOR_RANKS
 from lerobot_factorworld.study.report import load_config, regenerate_report
 from lerobot_factorworld.study.results import read_results, write_results
 
@@ -257,3 +259,15 @@ def test_the_quick_studys_ordering_is_not_resolved(tmp_path):
     text = report.read_text()
     assert "agrees with the paper" not in text
     assert "the factor ordering, the text's tiers: **not resolved**" in text
+
+
+def test_the_spearman_difference_between_two_methods():
+    """How much a method moves the ordering: one ordering as the paper's, the other reversed."""
+    paper_order = {"camera_pos": 0.2, "table_texture": 0.4, "floor_texture": 0.6, "light": 0.8}  # hardest first
+    reversed_order = {f: 1.0 - r for f, r in paper_order.items()}
+    rows = rows_of(paper_order, episodes=200) + rows_of(reversed_order, episodes=200, method="bc_none")
+    factors = list(paper_order)
+    (own, diff) = method_rho_differences(rows, ["bc", "bc_none"], factors, PAPER_FACTOR_RANKS)["bc_none"]
+    assert own[0] == pytest.approx(-1.0)
+    assert diff[0] == pytest.approx(-2.0)
+    assert diff[2] < 0  # the whole interval: bc_none's ordering is resolvably further from the paper's

@@ -590,3 +590,32 @@ def _pooled_bootstrap(rows: Sequence[dict], keys: Sequence[str]) -> tuple[list[t
 
     point, reps = table.bootstrap(statistic)
     return names, point, reps, len(table.seeds)
+
+
+def method_rho_differences(
+    rows: Sequence[dict], methods: Sequence[str], factors: Sequence[str], reference: Mapping[str, float]
+) -> dict[str, tuple[Interval, Interval]]:
+    """Per method after the first: Spearman's rho of its factor ordering with ``reference`` and that rho minus the
+    first method's, each with its 95% seed-bootstrap interval (one bootstrap over both methods, main grid; the
+    factors both methods have). E.g. how much an augmentation moves the ordering toward the paper's."""
+    grid = [r for r in main_grid(rows) if r["method"] in methods and r["condition"] in (TRAIN_SUITE, *factors)]
+    table = cells(grid, gaps=True)
+    shared = [f for f in factors if all(any(k[0] == m and k[4] == f for k in table.keys) for m in methods)]
+    if len(methods) < 2 or len(shared) < 3:
+        return {}
+    groups = [[i for i, k in enumerate(table.keys) if k[0] == m and k[4] == f] for m in methods for f in shared]
+    train = table.train_columns()
+    point, reps = table.bootstrap(lambda r, n: group_mean(cell_gaps(r, train), groups))
+
+    def rho(gaps: np.ndarray) -> np.ndarray:  # (..., M * F) -> (..., M)
+        flat = gaps.reshape(-1, len(methods), len(shared))
+        out = [[spearman(rank_hardest_first(dict(zip(shared, g.tolist()))), reference) for g in row] for row in flat]
+        return np.array(out).reshape(*gaps.shape[:-1], len(methods))
+
+    p, r = rho(point), rho(reps)
+    out = {}
+    for i, method in enumerate(methods[1:], start=1):
+        own = _interval(np.array(p[i]), r[:, i])[0]
+        diff = _interval(np.array(p[i] - p[0]), r[:, i] - r[:, 0])[0]
+        out[method] = (own, diff)
+    return out

@@ -24,6 +24,7 @@ from .aggregate import (
     gap_per_radius,
     main_grid,
     method_gap_differences,
+    method_rho_differences,
     pair_bands,
     pair_rows,
     pair_summary,
@@ -142,6 +143,7 @@ def render(
     verdicts = decide(study_claims(cfg), cfg, rows)
     lines += _ordering_section(cfg, rows, verdicts)
     lines += claims_section(verdicts)
+    lines += _ordering_per_task_section(cfg, rows)
     lines += family_sections(FAMILY_RESULTS)
     lines += _gap_table(cfg, rows)
     lines += _gap_against_n_section(cfg, rows)
@@ -266,12 +268,55 @@ def _ordering_section(cfg: StudyConfig, rows: list[dict], verdicts: list[ClaimVe
                 + "; ".join(f"{f} is ranked {ours_r[f]:g} here and {paper_r[f]:g} in the paper" for f in differ)
                 + "."
             )
+    trained = [m.name for m in cfg.methods]
+    for other, (own, diff) in method_rho_differences(rows, trained, cfg.factors, PAPER_FACTOR_RANKS).items():
+        lines.append(
+            f"{other}'s ordering: Spearman {own[0]:+.2f} {ci(*own[1:], digits=2)} with the paper's, {diff[0]:+.2f} "
+            f"{ci(*diff[1:], digits=2)} against {method}'s (bootstrap; one resampling of both)."
+        )
     sentence = ordering_sentence(verdicts)
     if sentence:
         lines.append(sentence)
     lines.append(PAPER_ORDERING)
     lines.append("")
     return lines + _resolved_factors(bootstrap, method, sorted(gaps, key=lambda f: ours.get(f, 99)))
+
+
+def _ordering_per_task_section(cfg: StudyConfig, rows: list[dict]) -> list[str]:
+    """Each task's own ordering (the first method's mean gap per factor, its rank and Spearman's rho with the
+    paper's), so a pooled ordering that one task makes is seen as such."""
+    tasks = [t for t in cfg.tasks if any(r["task"] == t for r in rows)]
+    if len(tasks) < 2 or len(cfg.shifted_factors()) < 2:
+        return []
+    method = cfg.methods[0].name
+    per_task = {
+        t: factor_gap_bootstrap([r for r in rows if r["task"] == t], method, cfg.shifted_factors()) for t in tasks
+    }
+    lines = [
+        f"## Ordering per task ({method})",
+        "",
+        "Each task's mean gap per factor (over N and seeds) with its 95% bootstrap interval and its rank among the "
+        "factors (1 = hardest); the last row is Spearman's rho with the paper's ranks.",
+        "",
+        "| factor | " + " | ".join(tasks) + " | paper rank |",
+        "|---|" + "---|" * (len(tasks) + 1),
+    ]
+    intervals = {t: b.intervals() for t, b in per_task.items()}
+    ranks = {t: rank_hardest_first({f: v[0] for f, v in intervals[t].items()}) for t in tasks}
+    for factor in cfg.shifted_factors():
+        cells = []
+        for t in tasks:
+            found = intervals[t].get(factor)
+            cells.append(f"{found[0]:+.3f} {ci(*found[1:])} ({ranks[t][factor]:g})" if found else "n/a")
+        paper = PAPER_FACTOR_RANKS.get(factor)
+        lines.append(f"| {factor} | " + " | ".join(cells) + f" | {paper if paper is not None else '—'} |")
+    rhos = []
+    for t in tasks:
+        rho = spearman(ranks[t], PAPER_FACTOR_RANKS)
+        low, high = per_task[t].rho_interval(PAPER_FACTOR_RANKS)
+        rhos.append("n/a" if math.isnan(rho) else f"{rho:+.2f} {ci(low, high, digits=2)}")
+    lines += ["| Spearman with the paper | " + " | ".join(rhos) + " | |", ""]
+    return lines
 
 
 def _resolved_factors(bootstrap: FactorGapBootstrap, method: str, hardest_first: list[str]) -> list[str]:
