@@ -53,6 +53,55 @@ def test_paired_gap_is_newcombes_interval():
         metrics.paired_gap([True], [True, False])
 
 
+def test_results_rows_hold_the_signed_gap_of_each_checkpoints_own_paired_episodes(tmp_path):
+    """results.csv's gap is P_T - P_F of the same checkpoint on the same episode seeds, with Newcombe's paired
+    interval: one checkpoint loses under its shift, the other gains, so a swapped sign or a gap paired with
+    another checkpoint's train episodes shows."""
+    from types import SimpleNamespace
+
+    from lerobot_factorworld.study.results import Evaluation, read_results, result_rows, write_results
+    from lerobot_factorworld.study.steps import Step
+
+    cfg = SimpleNamespace(name="s", methods=[SimpleNamespace(name="bc", policy={"type": "bc"})])
+    seeds = list(range(1000, 1010))
+    t, f = True, False
+    outcomes = {  # (checkpoint, condition) -> the 10 paired episodes' successes
+        ("a", "train"): [t, t, t, t, t, t, t, t, f, f],  # 8 / 10
+        ("a", "light"): [t, t, t, f, f, f, f, f, f, t],  # 4 / 10: 3 both, 5 train only, 1 shifted only, 1 neither
+        ("b", "train"): [t, t, t, f, f, f, f, f, f, f],  # 3 / 10
+        ("b", "light"): [t, t, f, t, t, t, t, f, f, f],  # 6 / 10: 2 both, 1 train only, 4 shifted only, 3 neither
+        ("b", "camera_pos"): [t] * 10,  # other episode seeds than b's train: no paired gap
+    }
+
+    def evaluation(checkpoint, condition, successes):
+        meta = {"method": "bc", "task": "door-open", "n_train_envs": 2, "seed": 0, "widths": "default"}
+        result = {"successes": successes, "seeds": seeds if condition != "camera_pos" else [s + 1 for s in seeds]}
+        result |= {"n_envs": 2, "envs_visited": 2, "fingerprint": "f" * 16}
+        step = Step("eval", {"condition": condition}, (f"train-{checkpoint}",), {**meta, "condition": condition})
+        return Evaluation(step, result)
+
+    rows = result_rows(cfg, [evaluation(c, condition, s) for (c, condition), s in outcomes.items()])
+    path = write_results(rows, tmp_path / "results.csv")
+    read = {(row["step"], row["condition"]): row for row in read_results(path)}
+    by_cell = {cell: read[(row["step"], row["condition"])] for cell, row in zip(outcomes, rows)}
+    columns = ("successes", "success_rate", "train_success_rate", "gap", "gap_ci_low", "gap_ci_high")
+
+    def numbers(cell):
+        return tuple(by_cell[cell][c] for c in columns)
+
+    assert numbers(("a", "train")) == (8, 0.8, 0.8, 0.0, *[pytest.approx(math.nan, nan_ok=True)] * 2)
+    assert numbers(("b", "train")) == (3, 0.3, 0.3, 0.0, *[pytest.approx(math.nan, nan_ok=True)] * 2)
+    # a under light: P_T 0.8 (Wilson 0.490162..0.943318), P_F 0.4 (0.168180..0.687326), phi = -2 / sqrt(384);
+    # lower 0.4 - sqrt(0.309838^2 + 2 * 0.102062 * 0.309838 * 0.287326 + 0.287326^2) = -0.043540,
+    # upper 0.4 + sqrt(0.143318^2 + 2 * 0.102062 * 0.143318 * 0.231820 + 0.231820^2) = 0.684714
+    assert numbers(("a", "light")) == pytest.approx((4, 0.4, 0.8, 0.4, -0.04354, 0.684714), abs=1e-6)
+    # b under light gains: P_T 0.3 (0.107791..0.603222), P_F 0.6 (0.312674..0.831820), ad - bc = 2 <= n/2: phi 0;
+    # lower -0.3 - sqrt(0.192209^2 + 0.231820^2) = -0.601139, upper -0.3 + sqrt(0.303222^2 + 0.287326^2) = 0.117732
+    assert numbers(("b", "light")) == pytest.approx((6, 0.6, 0.3, -0.3, -0.601139, 0.117732), abs=1e-6)
+    unpaired = numbers(("b", "camera_pos"))
+    assert unpaired[:2] == (10, 1.0) and all(math.isnan(v) for v in unpaired[2:])
+
+
 def test_pair_metric_interaction_mean_se_and_spearman():
     assert metrics.pair_metric(0.4, 0.5, 0.8) == pytest.approx(-0.2)  # (0.4 - 0.5) / 0.5
     assert metrics.pair_metric(0.63, 0.6, 0.9) == pytest.approx(0.05)
@@ -104,7 +153,7 @@ def test_the_pairs_section_counts_cells_whose_pair_metric_is_undefined():
 
 
 def test_a_pick_study_report_sets_success_next_to_the_papers_real_robot_table():
-    from lerobot_factorworld.pick.report import real_robot_section as _real_robot_section
+    from lerobot_factorworld.family_reports.pick import real_robot_section as _real_robot_section
     from lerobot_factorworld.study.config import StudyConfig
     from lerobot_factorworld.study.plan import DEFAULT_WIDTHS
 
