@@ -104,13 +104,66 @@ def test_known_small_cases():
     assert set(np.round(reps.ravel(), 9)) == {0.2, 0.5, 0.8}
     assert abs((reps == 0.2).mean() - 0.25) < 0.03
     assert np.allclose(metrics.percentile_interval(reps), ([0.2], [0.8]))
-    # one seed, one cell of 400 episodes at 0.5: the episode resample is binomial, sd sqrt(0.25 / 400)
+    # one seed, one cell of 400 episodes at 0.5: the episode resample is binomial, sd sqrt(0.25 / 400); the
+    # interval is the replicates' 2.5th and 97.5th percentiles (about 0.5 -+ 1.96 * 0.025; 90% would be -+ 0.041)
     _, reps = metrics.seed_bootstrap(np.array([[0.5]]), np.array([[400]]), mean)
     assert reps.std() == pytest.approx(0.025, rel=0.1)
     low, high = metrics.percentile_interval(reps)
-    assert low[0] == pytest.approx(0.451, abs=0.01) and high[0] == pytest.approx(0.549, abs=0.01)
+    assert (low[0], high[0]) == (np.quantile(reps, 0.025), np.quantile(reps, 0.975))
+    assert low[0] == pytest.approx(0.451, abs=0.005) and high[0] == pytest.approx(0.549, abs=0.005)
     # a statistic undefined in most replicates has no interval
     assert all(math.isnan(v) for v in metrics.percentile_interval(np.array([np.nan, np.nan, 1.0])))
+
+
+def test_the_percentile_interval_is_the_95_percent_one():
+    """0 .. 1 in 1001 even steps: the 2.5th and 97.5th percentiles are 0.025 and 0.975 exactly (a 90% interval
+    would be 0.05 .. 0.95); NaN replicates are left out, not counted as values."""
+    replicates = np.arange(1001) / 1000
+    assert metrics.percentile_interval(replicates) == pytest.approx((0.025, 0.975), abs=1e-12)
+    assert metrics.percentile_interval(replicates, level=0.9) == pytest.approx((0.05, 0.95), abs=1e-12)
+    with_nan = np.concatenate([replicates, [np.nan] * 10])
+    assert metrics.percentile_interval(with_nan) == pytest.approx((0.025, 0.975), abs=1e-12)
+    columns = np.stack([replicates, 2 * replicates], axis=1)  # per column
+    low, high = metrics.percentile_interval(columns)
+    assert low == pytest.approx([0.025, 0.05], abs=1e-12) and high == pytest.approx([0.975, 1.95], abs=1e-12)
+
+
+def test_a_factors_gap_interval_is_the_95_percent_interval_of_the_seed_bootstrap():
+    """The report's interval of a factor's mean gap, recomputed from the same resamples (numpy's PCG64 from
+    BOOTSTRAP_SEED, seeds then episodes, drawn as ``seed_bootstrap`` draws them) and numpy's percentiles:
+    equal to the last digit, and at least 0.02 from the 90% interval at either end."""
+    successes = {0: (16, 9), 1: (13, 10), 2: (18, 6)}  # seed -> (train, light) successes of 20 paired episodes
+    rows = [
+        {
+            "method": "bc",
+            "task": "door-open",
+            "n_train_envs": 5,
+            "seed": seed,
+            "widths": DEFAULT_WIDTHS,
+            "condition": condition,
+            "episodes": 20,
+            "successes": k,
+            "success_rate": k / 20,
+            "gap": 0.0 if condition == "train" else (train - light) / 20,
+        }
+        for seed, (train, light) in successes.items()
+        for condition, k in (("train", train), ("light", light))
+    ]
+    ((point, low, high),) = aggregate.factor_gap_intervals(rows, "bc", ["light"]).values()
+
+    rates = np.array([[train / 20, light / 20] for train, light in successes.values()])  # (seeds, [train, light])
+    rng = np.random.default_rng(metrics.BOOTSTRAP_SEED)
+    gaps = []
+    for start in range(0, metrics.BOOTSTRAP_RESAMPLES, metrics.BOOTSTRAP_CHUNK):
+        chunk = min(metrics.BOOTSTRAP_CHUNK, metrics.BOOTSTRAP_RESAMPLES - start)
+        drawn = rates[rng.integers(0, 3, size=(chunk, 3))]  # (chunk, seeds drawn, cells)
+        resampled = rng.binomial(np.full(drawn.shape, 20), drawn) / 20
+        gaps.append((resampled[..., 0] - resampled[..., 1]).mean(axis=1))  # mean over the drawn seeds
+    gaps = np.concatenate(gaps)
+    assert point == pytest.approx((7 + 3 + 12) / 3 / 20)
+    assert (low, high) == pytest.approx((np.percentile(gaps, 2.5), np.percentile(gaps, 97.5)), abs=1e-12)
+    narrower = np.percentile(gaps, 5), np.percentile(gaps, 95)
+    assert narrower[0] - low > 0.02 and high - narrower[1] > 0.02
 
 
 def test_vectorised_pieces_match_the_scalar_ones():
