@@ -339,6 +339,34 @@ def test_rerun_stale_redoes_the_step_and_its_dependents_and_keeps_the_old_folder
     assert not ran and again.stale == 0 and _warnings(capsys.readouterr().err) == []
 
 
+def test_rerun_stale_redoes_dependents_of_dependents(tmp_path, ran, capsys):
+    """A chain of three: another task's dataset (out-of-domain data) -> the training that merges it -> that
+    checkpoint's evaluations, which depend on the training and the task's own dataset but not on the other
+    task's. When the other task's dataset is stale, the evaluations are redone too, through the training."""
+    config = tmp_path / "study.yaml"
+    ood = {"name": "bc_ood", "policy": {"type": "bc"}, "extra_tasks": ["pick-place"]}
+    config.write_text(json.dumps({**SETTINGS, "n_train_envs": [1], "methods": [ood], "out_dir": str(tmp_path / "s")}))
+    cfg = parse_config(StudyConfig, [f"--config_path={config}"], "study")
+    assert runner.run_study(cfg, command="first").ran == {"collect": 2, "train": 1, "eval": 3}
+    plan = make_plan(cfg)
+    own, other = (next(s for s in plan.of_kind("collect") if s.meta["task"] == t) for t in ("door-open", "pick-place"))
+    (train,) = plan.of_kind("train")
+    evals = plan.of_kind("eval")
+    assert train.deps == (own.key, other.key) and all(e.deps == (train.key, own.key) for e in evals)  # the chain
+    assert stale.dependents(plan, {other.key}) == [train, *evals]
+    _made_by(other, cfg.out_dir, Provenance(OTHER, True, OTHER_HASH))
+    capsys.readouterr()
+    ran.clear()
+    outcome = runner.run_study(replace(cfg, rerun_stale=True), command="rerun")
+    assert [s.key for s in ran] == [other.key, train.key, *(e.key for e in evals)]  # the first, its dependents'
+    assert outcome.ran == {"collect": 1, "train": 1, "eval": 3} and len(outcome.set_aside) == 5
+    assert "they and the 4 cached step(s) depending on them are redone" in _warnings(capsys.readouterr().err)[0]
+    now = provenance.current()
+    assert all(steps.provenance_of(steps.read_result(s, cfg.out_dir)) == now for s in plan.steps)
+    kept = own.folder(cfg.out_dir)  # the task's own dataset is not redone
+    assert kept.is_dir() and not kept.with_name(f"{own.key}.stale-826fe54").exists()
+
+
 def test_a_second_set_aside_of_one_step_keeps_both_old_folders(tmp_path):
     folder = tmp_path / "steps" / "eval" / "abc"
     for expected in ("abc.stale-826fe54", "abc.stale-826fe54-2"):
