@@ -13,9 +13,11 @@ import pytest
 
 from lerobot_factorworld.datasets.collect import CollectConfig, collect, staging_dir
 from lerobot_factorworld.datasets.query import episode_records, select_episodes
+from lerobot_factorworld.datasets.schema import decode_factors, encode_factors
+from lerobot_factorworld.factors.registry import FACTORS as ALL_FACTORS
 from lerobot_factorworld.protocol.sampling import sample_configs
 
-FACTORS = ["table_texture", "light", "distractors", "camera_pos"]
+FACTORS = list(ALL_FACTORS)  # every factor varies in the tiny dataset: each column holds a drawn value
 
 
 def tiny(root: Path, **overrides) -> CollectConfig:
@@ -58,17 +60,24 @@ def test_dataset_loads_offline_with_lerobot(dataset):
     assert not staging_dir(root).exists()  # shards were merged and cleaned up
 
 
-def test_episode_factors_match_the_environments_that_produced_them(dataset):
+def test_episode_factors_match_the_environments_that_produced_them(dataset, make_env):
+    """Every factor's column holds the value its environment drew, read back typed, and no column holds the
+    default scene's value (so a column left at its default, or blanked, would show)."""
     root, _ = dataset
     configs = {c.env_id: c for c in sample_configs("pick-place", 2, seed=3, factors=FACTORS)}
+    _, info = make_env("pick-place", cameras=()).reset(seed=0)
+    default = decode_factors(encode_factors(info["factors"]))  # the default scene's values, as a row reads back
     records = episode_records("local/tiny", root)
     assert sorted(r["env_id"] for r in records) == sorted([*configs] * 2)
+    assert set(records[0]["factors"]) == set(ALL_FACTORS)
     for record in records:
         config = configs[record["env_id"]]
-        for name in FACTORS:
-            assert record["factors"][name] == getattr(config.factors, name), name
+        for name in ALL_FACTORS:
+            drawn = getattr(config.factors, name)
+            assert drawn is not None and drawn != default[name], name
+            assert record["factors"][name] == drawn, name
         assert record["split"] == "train" and len(record["factors"]["object_pos"]) == 2
-        assert record["factors"]["object_size"] == 1.0  # typed default, as the scene really was
+        assert len(record["factors"]["distractors"]) == 1  # SamplingOptions' default count
 
 
 def test_select_episodes_by_factor_value(dataset):
