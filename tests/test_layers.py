@@ -1,16 +1,21 @@
-"""The package's import graph stays layered (docs/architecture.md): the import-linter contract in
-pyproject.toml holds, and it really fails on an upward import or an unexplained import inside a function."""
+"""The package's import graph stays layered (docs/architecture.md): the import-linter contracts in
+pyproject.toml hold, every one of them is checked, their layers are the documented ones and cover the package,
+and the configuration as written (not a test's own selection) really fails on an upward import, on one policy
+importing the other, and on an unexplained import inside a function."""
 
 from __future__ import annotations
 
 import os
+import re
 import shutil
 import subprocess
 import sys
+import tomllib
 from pathlib import Path
 
 REPO = Path(__file__).resolve().parents[1]
 BIN = Path(sys.executable).parent
+PACKAGE = "lerobot_factorworld"
 
 
 def _copy(tmp_path: Path) -> Path:
@@ -29,10 +34,54 @@ def _lint_imports(root: Path) -> subprocess.CompletedProcess:
     return subprocess.run([str(BIN / "lint-imports"), "--no-cache"], cwd=root, env=env, capture_output=True, text=True)
 
 
-def test_the_layer_contracts_hold():
+def _contracts() -> list[dict]:
+    return tomllib.loads((REPO / "pyproject.toml").read_text())["tool"]["importlinter"]["contracts"]
+
+
+def _text(out: subprocess.CompletedProcess) -> str:
+    """import-linter's report with its line wrapping undone."""
+    return " ".join(out.stdout.split())
+
+
+def test_every_contract_is_checked_and_kept():
     out = _lint_imports(REPO)
     assert out.returncode == 0, out.stdout[-3000:]
-    assert "0 broken" in out.stdout
+    kept = re.search(r"Contracts: (\d+) kept, (\d+) broken\.", _text(out))
+    assert kept, out.stdout[-3000:]
+    assert int(kept.group(1)) == len(_contracts()) > 0 and kept.group(2) == "0"
+    assert {c["type"] for c in _contracts()} == {"layers", "independence"}
+
+
+def _documented_layers() -> list[set[str]]:
+    """docs/architecture.md's layer table, bottom first: each layer's top-level modules (``core/`` -> core,
+    ``tasks.py`` -> tasks; the files named in parentheses are inside them)."""
+    rows = re.findall(r"^\| \d+[a-z]?\. [^|]+\| ([^|]+) \|", (REPO / "docs" / "architecture.md").read_text(), re.M)
+    named = [re.findall(r"`([^`]+)`", re.sub(r"\([^)]*\)", "", row)) for row in rows]
+    return [{name.rstrip("/").removesuffix(".py") for name in names} for names in named]
+
+
+def test_the_layers_are_the_documented_ones_and_hold_every_module_once():
+    (layers,) = [c["layers"] for c in _contracts() if c["type"] == "layers"]
+    configured = [set(layer.split(" | ")) for layer in reversed(layers)]  # bottom first, as the docs
+    assert configured == _documented_layers()
+    modules = [m for layer in configured for m in layer]
+    package = REPO / PACKAGE
+    found = {p.stem for p in package.glob("*.py") if p.name != "__init__.py"}
+    found |= {p.name for p in package.iterdir() if (p / "__init__.py").is_file()}
+    assert sorted(modules) == sorted(found)  # every module in exactly one layer
+
+
+def test_one_policy_importing_the_other_breaks_the_independence_contract(tmp_path):
+    (independence,) = [c for c in _contracts() if c["type"] == "independence"]
+    assert independence["modules"] == [f"{PACKAGE}.policies.bc", f"{PACKAGE}.policies.rt1"]
+    root = _copy(tmp_path)
+    module = root / PACKAGE / "policies" / "bc" / "augment.py"
+    module.write_text(module.read_text() + "\nfrom ..rt1 import presets  # bc reaching into rt1\n")
+    out = _lint_imports(root)
+    assert out.returncode != 0
+    text = _text(out)
+    assert f"{independence['name']} BROKEN" in text and "Contracts: 1 kept, 1 broken." in text
+    assert f"{PACKAGE}.policies.bc is not allowed to import {PACKAGE}.policies.rt1" in text
 
 
 def test_an_upward_import_breaks_the_layer_contract(tmp_path):
@@ -52,14 +101,27 @@ def test_a_family_package_imported_below_its_layer_breaks_the_contract(tmp_path)
     assert out.returncode != 0 and "not allowed to import lerobot_factorworld.pick" in out.stdout
 
 
-def test_an_unexplained_import_inside_a_function_fails_ruff(tmp_path):
-    root = _copy(tmp_path)
-    module = root / "lerobot_factorworld" / "core" / "io.py"
-    module.write_text(module.read_text() + "\n\ndef late():\n    import json\n\n    return json\n")
-    out = subprocess.run(
-        [str(BIN / "ruff"), "check", "--no-cache", "--select", "PLC0415", str(module)],
+def _ruff(root: Path, *paths: Path) -> subprocess.CompletedProcess:
+    """``ruff check`` as ``make lint`` runs it: the rules are the ones pyproject.toml selects."""
+    return subprocess.run(
+        [str(BIN / "ruff"), "check", "--no-cache", "--output-format=concise", *map(str, paths)],
         cwd=root,
         capture_output=True,
         text=True,
     )
-    assert out.returncode != 0 and "PLC0415" in out.stdout
+
+
+def test_an_unexplained_import_inside_a_function_fails_ruff(tmp_path):
+    root = _copy(tmp_path)
+    module = root / PACKAGE / "core" / "io.py"
+    assert _ruff(root, module).returncode == 0
+    module.write_text(module.read_text() + "\n\ndef late():\n    import json\n\n    return json\n")
+    out = _ruff(root, module)
+    assert out.returncode != 0 and re.findall(r"\bPLC0415\b", out.stdout) == ["PLC0415"], out.stdout
+    explained = module.read_text().replace("import json\n", "import json  # noqa: PLC0415 - a reason\n")
+    module.write_text(explained)
+    assert _ruff(root, module).returncode == 0
+    tests = root / "tests"  # deferred imports are the tests' and scripts' to choose
+    tests.mkdir()
+    (tests / "test_late.py").write_text("def test_late():\n    import json\n\n    assert json\n")
+    assert _ruff(root, tests / "test_late.py").returncode == 0
