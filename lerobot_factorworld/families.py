@@ -29,15 +29,15 @@ class TaskFamily:
             ``info`` and study step results); ``""``: the family has no content.
         sampling_options: The ``SamplingOptions`` fields only this family reads.
         conditions: Evaluation conditions the family adds to the factor shifts.
-        report_files: Files the family's report sections read, next to ``results.csv`` (e.g. a CSV of
-            per-episode breakdowns); committed and copied with it.
+        report_entry_point: Where the family's part of a study report lives (``"module:attr"``, a
+            ``study.family_report.FamilyReport`` above the study); ``""``: the family adds nothing to reports.
     """
 
     name: ClassVar[str] = ""
     content_key: ClassVar[str] = ""
     sampling_options: ClassVar[tuple[str, ...]] = ()
     conditions: ClassVar[tuple[str, ...]] = ()
-    report_files: ClassVar[tuple[str, ...]] = ()
+    report_entry_point: ClassVar[str] = ""
 
     # --- content: what a configuration of this family holds besides its factors ----------------------
 
@@ -125,28 +125,12 @@ class TaskFamily:
         kind (object or articulated, ``envs/stages.py``)."""
         return None
 
-    # --- records and report -------------------------------------------------------------------------------
+    # --- records -----------------------------------------------------------------------------------------
 
     def episode_records(
         self, configs: Sequence[Any], seeds: Sequence[int], object_pos_width: str | None = None
     ) -> list[dict]:
         """What each evaluated episode (reset with ``seeds``) asked for; ``[]`` for a plain task."""
-        return []
-
-    def write_report_files(self, cfg: Any, evaluations: Sequence[Any], study_dir: Any) -> list[Any]:
-        """Write the family's CSV files (named in :attr:`report_files`) next to the study's ``results.csv``
-        from its finished ``evaluations`` (step and result, whose :attr:`content_key` entry holds
-        :meth:`episode_records`); the paths written. Only a study that ran calls it: a report regenerated
-        from committed CSV files reads what this wrote, so every number of the family's sections is in a CSV."""
-        return []
-
-    def report_sections(self, cfg: Any, rows: Sequence[dict], study_dir: Any, part: str) -> list[str]:
-        """The family's extra report.md lines for a study; none for a plain task.
-
-        ``rows`` are the study's ``results.csv`` rows and ``study_dir`` the folder that holds it and the
-        family's :attr:`report_files` (read them, never step results: the same lines must come out of a
-        live study and of a report regenerated from committed files); ``part`` is where the lines go
-        (``"results"``: after the factor ordering; ``"details"``: at the end)."""
         return []
 
 

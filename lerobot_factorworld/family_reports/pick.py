@@ -1,9 +1,9 @@
-"""The pick family's part of a study report (its ``report_sections`` hook): success next to the paper's
-real-robot table, and success per named object, shape and phrasing.
+"""The pick family's part of a study report (:data:`PICK_REPORT`, named by ``PickFamily.report_entry_point``):
+success next to the paper's real-robot table, and success per named object, shape and phrasing.
 
 Every number comes from a CSV file next to ``report.md``: the real-robot table from the study's
 ``results.csv`` rows, the breakdowns from ``pick_breakdowns.csv``, which a study that ran writes from the
-evaluations' episode records (:mod:`.records`, :func:`write_report_files`) and every report reads back, so a
+evaluations' episode records (``pick/records.py``, :meth:`PickReport.write_report_files`) and every report reads back, so a
 report regenerated from the committed CSV files (``factorworld report``) has the same tables.
 """
 
@@ -15,15 +15,16 @@ from pathlib import Path
 from typing import Any
 
 from ..core.io import atomic_write_text, read_table
+from ..pick.records import BY, breakdown
 from ..protocol.conditions import TRAIN_SUITE
 from ..study.aggregate import main_grid, pooled_rho_interval, pooled_success
 from ..study.config import StudyConfig
+from ..study.family_report import FamilyReport
 from ..study.markdown import FAMILY_DETAILS, FAMILY_RESULTS, ci
 from ..study.metrics import spearman
 from ..study.paper import PAPER_REAL_ROBOT
 from ..study.results import Evaluation, csv_text
 from ..tasks import get_task
-from .records import BY, breakdown
 
 FAMILY = "pick"  # the family's name and the key of its episode records in an evaluation's result
 BREAKDOWN_FILE = "pick_breakdowns.csv"
@@ -31,21 +32,27 @@ BREAKDOWN_COLUMNS = ("method", "task", "n_train_envs", "seed", "condition", "by"
 MARKDOWN_BY = ("target", "shape", "template")  # instructions are many: in the CSV only
 
 
-def write_report_files(cfg: StudyConfig, evaluations: Sequence[Evaluation], study_dir: str | Path) -> list[Path]:
-    """``pick_breakdowns.csv`` from the finished evaluations' episode records (the family's ``report_files``)."""
-    path = write_breakdowns(evaluations, study_dir)
-    return [path] if path else []
+class PickReport(FamilyReport):
+    """The pick family's report part: ``pick_breakdowns.csv`` and the sections that read it."""
 
+    report_files = (BREAKDOWN_FILE,)
 
-def report_sections(cfg: StudyConfig, rows: Sequence[dict], study_dir: str | Path, part: str) -> list[str]:
-    """The pick sections of ``report.md`` at ``part`` (the study's ``FAMILY_RESULTS`` or ``FAMILY_DETAILS``),
-    from ``rows`` and the ``pick_breakdowns.csv`` in ``study_dir`` (none: no breakdown section)."""
-    if part == FAMILY_RESULTS:
-        return real_robot_section(cfg, rows)
-    if part == FAMILY_DETAILS:
-        path = Path(study_dir) / BREAKDOWN_FILE
-        return breakdown_section(read_breakdowns(path)) if path.is_file() else []
-    raise ValueError(f"unknown report part {part!r}; valid: {FAMILY_RESULTS}, {FAMILY_DETAILS}")
+    def write_report_files(
+        self, cfg: StudyConfig, evaluations: Sequence[Evaluation], study_dir: str | Path
+    ) -> list[Path]:
+        """``pick_breakdowns.csv`` from the finished evaluations' episode records."""
+        path = write_breakdowns(evaluations, study_dir)
+        return [path] if path else []
+
+    def report_sections(self, cfg: StudyConfig, rows: Sequence[dict], study_dir: str | Path, part: str) -> list[str]:
+        """The pick sections of ``report.md`` at ``part`` (the study's ``FAMILY_RESULTS`` or ``FAMILY_DETAILS``),
+        from ``rows`` and the ``pick_breakdowns.csv`` in ``study_dir`` (none: no breakdown section)."""
+        if part == FAMILY_RESULTS:
+            return real_robot_section(cfg, rows)
+        if part == FAMILY_DETAILS:
+            path = Path(study_dir) / BREAKDOWN_FILE
+            return breakdown_section(read_breakdowns(path)) if path.is_file() else []
+        raise ValueError(f"unknown report part {part!r}; valid: {FAMILY_RESULTS}, {FAMILY_DETAILS}")
 
 
 # --- next to the paper's real-robot table ---------------------------------------------------------
@@ -180,3 +187,7 @@ def breakdown_section(rows: Sequence[dict]) -> list[str]:
                 lines.append(f"| {value} | " + " | ".join(cells) + " |")
             lines.append("")
     return lines
+
+
+PICK_REPORT = PickReport()
+"""The pick family's report part (``report_entry_point="lerobot_factorworld.family_reports.pick:PICK_REPORT"``)."""

@@ -2,7 +2,7 @@
 
 Every hook delegates to the module that owns the fact: layouts (:mod:`.layout`), their sampling and the
 language conditions (:mod:`.sampling`), the scene (:mod:`.episode`), the expert (:mod:`.expert`) and the
-per-episode records (:mod:`.records`).
+per-episode records (:mod:`.records`); its report part is ``family_reports/pick.py``, above the study.
 """
 
 from __future__ import annotations
@@ -20,7 +20,6 @@ from .episode import PickScene
 from .expert import PickExpert
 from .layout import PickLayout, default_layout, episode_record, workspace_keepout
 from .records import episode_records
-from .report import BREAKDOWN_FILE, report_sections, write_report_files
 from .sampling import CONDITIONS, check_condition, language_shift, sample_layouts
 
 
@@ -40,7 +39,7 @@ class PickFamily(TaskFamily):
     content_key = "pick"
     sampling_options = ("n_objects",)
     conditions = CONDITIONS
-    report_files = (BREAKDOWN_FILE,)
+    report_entry_point = "lerobot_factorworld.family_reports.pick:PICK_REPORT"
     n_objects = (MIN_OBJECTS, DEFAULT_OBJECTS, MAX_OBJECTS)
     """Objects per pick scene: fewest, default, most (``--sampling.n_objects``)."""
 
@@ -120,12 +119,6 @@ class PickFamily(TaskFamily):
         self, configs: Sequence[Any], seeds: Sequence[int], object_pos_width: str | None = None
     ) -> list[dict]:
         return episode_records(configs, seeds, object_pos_width)
-
-    def write_report_files(self, cfg: Any, evaluations: Sequence[Any], study_dir: Any) -> list[Any]:
-        return write_report_files(cfg, evaluations, study_dir)
-
-    def report_sections(self, cfg: Any, rows: Sequence[dict], study_dir: Any, part: str) -> list[str]:
-        return report_sections(cfg, rows, study_dir, part)
 
 
 PICK_FAMILY = PickFamily()

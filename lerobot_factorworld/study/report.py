@@ -1,6 +1,6 @@
 """Study outputs: ``results.csv`` (``results.py``), ``episodes.parquet`` (one row per episode: ``episodes.py``),
 PNG plots mirroring the paper's figures (``plots.py``), the task families' own files and sections (their
-``write_report_files`` and ``report_sections`` hooks, e.g. a CSV of breakdowns per episode record), and
+report parts' ``write_report_files`` and ``report_sections``, ``family_report.py``, e.g. a CSV of breakdowns per episode record), and
 ``report.md`` (``markdown.py``).
 
 One renderer, two ways in, so a documented number can always be recomputed from committed files:
@@ -21,9 +21,10 @@ from pathlib import Path
 
 from ..core.io import atomic_write_text
 from ..core.settings import parse_config
-from ..families import TaskFamily, family_of
+from ..families import family_of
 from .config import RUN_CONFIG_FILE, StudyConfig, write_run_config
 from .episodes import EPISODES_FILE, episode_rows, write_episodes
+from .family_report import FamilyReport, report_of
 from .markdown import REPORT_FILE, render
 from .plan import Plan, make_plan
 from .plots import write_plots
@@ -81,9 +82,9 @@ def render_report(
     return atomic_write_text(out_dir / REPORT_FILE, text), plots
 
 
-def families_of(cfg: StudyConfig) -> list[TaskFamily]:
-    """The task families of the study's tasks, each once, in task order."""
-    return list(dict.fromkeys(family_of(task) for task in cfg.tasks))
+def families_of(cfg: StudyConfig) -> list[FamilyReport]:
+    """The report parts of the study's task families, each once, in task order."""
+    return list(dict.fromkeys(report_of(family_of(task)) for task in cfg.tasks))
 
 
 # --- factorworld report: from committed files alone -----------------------------------------------
