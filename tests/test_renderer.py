@@ -3,6 +3,7 @@ with several models' renderers alive at once, drawn in turn, closed and replaced
 
 from __future__ import annotations
 
+import os
 import subprocess
 import sys
 import threading
@@ -92,3 +93,31 @@ def test_an_env_left_open_at_exit_prints_nothing():
     proc = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=120)
     assert proc.returncode == 0, proc.stderr[-2000:]
     assert "Exception ignored" not in proc.stderr and "Traceback" not in proc.stderr, proc.stderr[-2000:]
+
+
+def test_an_env_left_open_releases_its_renderers_when_collected_and_at_exit():
+    """Not only close(): a collected env frees its scenes' GL resources, and a script that never closes its env
+    ends without GL tracebacks (its renderers are released at exit, while GL is still loaded)."""
+    script = """
+import gc
+from lerobot_factorworld.envs.factor_env import FactorWorldEnv
+from lerobot_factorworld.protocol.sampling import sample_configs
+configs = sample_configs("door-open", n=1, seed=0)
+env = FactorWorldEnv("door-open", configs, image_size=16)
+env.reset(seed=0)
+scene = next(iter(env._scenes.values()))
+del env
+gc.collect()
+assert scene._renderer is None, "a collected env kept its renderer"
+env = FactorWorldEnv("door-open", configs, image_size=16)
+env.reset(seed=0)
+env.close()
+env.reset(seed=1)  # a reset after close builds scenes again; left open at exit
+print("ok")
+"""
+    out = subprocess.run(
+        [sys.executable, "-c", script], capture_output=True, text=True, env={**os.environ, "MUJOCO_GL": "egl"}
+    )
+    assert out.returncode == 0, out.stderr
+    assert out.stdout.strip() == "ok"
+    assert "Traceback" not in out.stderr and "Exception ignored" not in out.stderr, out.stderr

@@ -42,6 +42,7 @@ Info:
 from __future__ import annotations
 
 import copy
+import weakref
 from collections import OrderedDict
 from collections.abc import Sequence
 from dataclasses import fields, replace
@@ -121,6 +122,9 @@ class FactorWorldEnv(gym.Env):
         self.action_space = gym.spaces.Box(-1.0, 1.0, (4,), dtype=np.float32)
 
         self._scenes: OrderedDict[tuple, CompiledScene] = OrderedDict()
+        # The scenes' renderers are released when the env is collected, or at exit while GL is still loaded,
+        # not only by close(): an env left open must not end its script in GL tracebacks.
+        weakref.finalize(self, _close_scenes, self._scenes)
         self._scene_cache_size = max(1, scene_cache_size)
         self._scene: CompiledScene | None = None
         self._config: SceneConfig | None = None
@@ -178,9 +182,7 @@ class FactorWorldEnv(gym.Env):
         return self._last_frame.copy()
 
     def close(self) -> None:
-        for scene in self._scenes.values():
-            scene.close()
-        self._scenes.clear()
+        _close_scenes(self._scenes)  # the finalizer stays: scenes of a reset after close are released too
         self._scene = None
 
     # --- introspection ------------------------------------------------------------------------
@@ -354,3 +356,10 @@ _DEFAULTS: dict[str, Any] = {
     "distractors": (),
 }
 assert set(_DEFAULTS) | {"object_pos"} == set(FACTORS)
+
+
+def _close_scenes(scenes: OrderedDict[tuple, CompiledScene]) -> None:
+    """Close every cached scene (their renderers and Meta-World envs) and forget them."""
+    for scene in scenes.values():
+        scene.close()
+    scenes.clear()
