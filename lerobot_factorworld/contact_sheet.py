@@ -20,7 +20,7 @@ from .factors.registry import FACTORS, supported_factors
 from .factors.values import FactorValues, SceneConfig
 from .protocol.sampling import SamplingOptions, factor_rng, sample_factor
 from .scene.build import DEFAULT_QUALITY, check_quality
-from .scene.cameras import check_cameras
+from .scene.cameras import DEFAULT_CAMERAS, check_cameras
 from .tasks import check_tasks, get_task
 
 LABEL_WIDTH = 150
@@ -45,7 +45,7 @@ class ContactSheetConfig:
     task: str = "pick-place"
     n_values: int = 4
     image_size: int = 128
-    camera: str = "front"
+    camera: str = DEFAULT_CAMERAS[0]
     quality: str = DEFAULT_QUALITY
     seed: int = 0
     split: str = "eval"

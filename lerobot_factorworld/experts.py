@@ -28,7 +28,7 @@ def expert_policy(task: str | TaskSpec) -> Any:
 def expert_action(
     policy: Any, state: np.ndarray, rng: np.random.Generator | None = None, noise_std: float = 0.0
 ) -> np.ndarray:
-    """One expert action, optionally with Gaussian noise (the public Factor World used std 0.002)."""
+    """One expert action, optionally with Gaussian noise (demonstrations use :data:`DEFAULT_ACTION_NOISE`)."""
     action = np.asarray(policy.get_action(state), dtype=np.float32)
     if noise_std > 0:
         if rng is None:
@@ -37,6 +37,7 @@ def expert_action(
     return np.clip(action, -1.0, 1.0)
 
 
+DEFAULT_ACTION_NOISE = 0.002  # std of the demonstrations' action noise (the public Factor World's)
 NOISE_STREAM = 0  # spawn key of the action-noise stream under an episode seed
 
 

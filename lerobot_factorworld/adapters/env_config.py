@@ -41,8 +41,7 @@ from ..protocol.coverage import checked_vector_env
 from ..protocol.sampling import SamplingOptions
 from ..protocol.sidecar import check_against_dataset, read_dataset_condition
 from ..scene.build import DEFAULT_QUALITY, check_quality
-from ..scene.cameras import DEFAULT_CAMERAS as SCENE_DEFAULT_CAMERAS
-from ..scene.cameras import check_cameras
+from ..scene.cameras import DEFAULT_CAMERAS_SETTING, DEFAULT_IMAGE_SIZE, check_cameras
 from ..tasks import check_tasks, get_task
 
 logger = logging.getLogger(__name__)
@@ -51,8 +50,7 @@ AGENT_POS_DIM = 8
 ACTION_DIM = 4
 DEFAULT_N_TRAIN_ENVS = 5
 DEFAULT_ENV_SEED = 0
-DEFAULT_CAMERAS = ",".join(SCENE_DEFAULT_CAMERAS)  # the CLI spelling of the scene default
-DEFAULT_IMAGE_SIZE = 84
+DEFAULT_CAMERAS = DEFAULT_CAMERAS_SETTING  # the scene default, as the command line spells it
 OBS_QUALITY = {FACTORWORLD_OBS: DEFAULT_QUALITY, LEROBOT_METAWORLD_OBS: "full"}  # full: Meta-World's own pixels
 LEROBOT_IMAGE_FEATURE = "pixels/top"  # LeRobot's metaworld config names its corner2 image so
 

@@ -41,13 +41,13 @@ from ..core.splits import check_split
 from ..core.timing import Timings
 from ..envs import runtime
 from ..envs.factor_env import CONTROL_FPS, FactorWorldEnv
-from ..experts import Episode, expert_policy, rollout
+from ..experts import DEFAULT_ACTION_NOISE, Episode, expert_policy, rollout
 from ..factors.registry import PAPER_STUDY_FACTORS, check_factors
 from ..factors.values import SceneConfig
 from ..protocol.sampling import SamplingOptions, sample_configs
 from ..protocol.sidecar import SIDECAR
 from ..scene.build import DEFAULT_QUALITY, check_quality
-from ..scene.cameras import check_cameras
+from ..scene.cameras import DEFAULT_CAMERAS_SETTING, DEFAULT_IMAGE_SIZE, check_cameras
 from ..tasks import check_tasks
 from .card import write_card
 from .hub import check_push_settings, push_dataset
@@ -77,7 +77,7 @@ class CollectConfig:
         image_size: Square image side in pixels.
         quality: Rendering quality (``fast``, ``full`` or ``lod``: ``scene.build.QUALITIES``); recorded with the
             dataset, so frames of different qualities never mix.
-        action_noise: Std of the Gaussian noise added to the expert's actions (public Factor World: 0.002).
+        action_noise: Std of the Gaussian noise added to the expert's actions (default: the public Factor World's, ``experts.DEFAULT_ACTION_NOISE``).
         end_on_success: End episodes at the first success (else run to ``max_episode_steps``).
         max_episode_steps: Step limit per episode (``None``: the task's horizon).
         max_attempts: Attempts per demo before it is reported as failed.
@@ -104,10 +104,10 @@ class CollectConfig:
     demos_per_env: int | None = None
     split: str = "train"
     seed: int = 0
-    cameras: str = "front"
-    image_size: int = 84
+    cameras: str = DEFAULT_CAMERAS_SETTING
+    image_size: int = DEFAULT_IMAGE_SIZE
     quality: str = DEFAULT_QUALITY
-    action_noise: float = 0.002
+    action_noise: float = DEFAULT_ACTION_NOISE
     end_on_success: bool = True
     max_episode_steps: int | None = None
     max_attempts: int = 3

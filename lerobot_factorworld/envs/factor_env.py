@@ -56,7 +56,7 @@ from ..factors.registry import FACTORS, factor_range, support_reason
 from ..factors.values import FactorValues, SceneConfig, to_jsonable
 from ..families import family_of
 from ..scene.build import DEFAULT_HEADLIGHT, DEFAULT_QUALITY, QUALITIES, Quality
-from ..scene.cameras import DEFAULT_CAMERAS, check_camera_names
+from ..scene.cameras import DEFAULT_CAMERAS, DEFAULT_IMAGE_SIZE, check_camera_names
 from ..tasks import get_task
 from .lerobot_obs import FACTORWORLD_OBS, LEROBOT_METAWORLD_OBS, LeRobotMetaworldObs, check_obs_mode
 from .runtime import CompiledScene
@@ -77,7 +77,7 @@ class FactorWorldEnv(gym.Env):
         configs: SceneConfig | Sequence[SceneConfig] | None = None,
         *,
         cameras: Sequence[str] | str = DEFAULT_CAMERAS,
-        image_size: int | tuple[int, int] = 84,
+        image_size: int | tuple[int, int] = DEFAULT_IMAGE_SIZE,
         quality: Quality = DEFAULT_QUALITY,
         max_episode_steps: int | None = None,
         object_pos_width: str | None = None,

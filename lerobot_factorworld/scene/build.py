@@ -27,7 +27,7 @@ from ..core.checks import check_choice
 from ..factors.registry import is_rgb, parse_rgb
 from ..factors.values import FactorValues, SceneObject
 from ..tasks import TaskSpec, get_task
-from .cameras import CAMERAS
+from .cameras import CAMERAS, DEFAULT_CAMERAS, DEFAULT_IMAGE_SIZE
 from .lod import apply_lod
 
 Quality = Literal["fast", "full", "lod"]
@@ -90,9 +90,9 @@ def object_geometry(task_name: str) -> ObjectGeometry:
 def build_model(
     task: str | TaskSpec,
     factors: FactorValues,
-    cameras: tuple[str, ...] = ("front",),
+    cameras: tuple[str, ...] = DEFAULT_CAMERAS,
     quality: Quality = DEFAULT_QUALITY,
-    image_size: tuple[int, int] = (84, 84),
+    image_size: tuple[int, int] = (DEFAULT_IMAGE_SIZE, DEFAULT_IMAGE_SIZE),
 ) -> mujoco.MjModel:
     """Compile the scene of ``task`` under ``factors`` (``image_size`` is (height, width))."""
     return build_spec(task, factors, cameras, quality, image_size).compile()
@@ -101,9 +101,9 @@ def build_model(
 def build_spec(
     task: str | TaskSpec,
     factors: FactorValues,
-    cameras: tuple[str, ...] = ("front",),
+    cameras: tuple[str, ...] = DEFAULT_CAMERAS,
     quality: Quality = DEFAULT_QUALITY,
-    image_size: tuple[int, int] = (84, 84),
+    image_size: tuple[int, int] = (DEFAULT_IMAGE_SIZE, DEFAULT_IMAGE_SIZE),
 ) -> mujoco.MjSpec:
     task = task if isinstance(task, TaskSpec) else get_task(task)
     if quality not in QUALITIES:

@@ -56,6 +56,10 @@ CAMERAS: dict[str, CameraSpec] = {
 """Factor World's scene cameras by name; ``front`` is the default observation camera."""
 
 DEFAULT_CAMERAS = ("front",)
+"""The default observation cameras: every default camera of the package derives from this one."""
+DEFAULT_CAMERAS_SETTING = ",".join(DEFAULT_CAMERAS)  # its spelling in a config or on the command line
+DEFAULT_IMAGE_SIZE = 84
+"""The default square image side in pixels (the paper's): every default image size derives from this one."""
 
 
 def check_camera_names(names: tuple[str, ...] | list[str], allow_none: bool = False) -> tuple[str, ...]:

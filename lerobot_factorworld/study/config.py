@@ -24,11 +24,13 @@ from ..core.checks import check_choice
 from ..core.io import atomic_write_json
 from ..datasets.hub import check_hub_repo_id
 from ..envs.lerobot_obs import FACTORWORLD_OBS, LEROBOT_METAWORLD_OBS, check_lerobot_task, check_obs_mode
+from ..experts import DEFAULT_ACTION_NOISE
 from ..factors.registry import PAPER_STUDY_FACTORS, WIDTHS, check_task_support, get_factor
 from ..families import all_families, condition_family, family_of
 from ..protocol.conditions import PAIR_SEPARATOR, condition_name, parse_shift
 from ..protocol.sampling import DEFAULT_RGB_FRACTION, SamplingOptions
 from ..scene.build import DEFAULT_QUALITY, QUALITIES
+from ..scene.cameras import DEFAULT_CAMERAS_SETTING, DEFAULT_IMAGE_SIZE
 from ..tasks import get_task
 from .checkpoint import checkpoint_setting
 from .claim_config import ClaimConfig
@@ -285,10 +287,10 @@ class CollectSettings:
 
     demos: int = 50
     demos_per_task: dict[str, int] = field(default_factory=dict)
-    cameras: str = "front"
-    image_size: int = 84
+    cameras: str = DEFAULT_CAMERAS_SETTING
+    image_size: int = DEFAULT_IMAGE_SIZE
     use_videos: bool = False
-    action_noise: float = 0.002
+    action_noise: float = DEFAULT_ACTION_NOISE
     max_episode_steps: int | None = None
     object_pos_width: str = "narrow"
     n_distractors: int = 1

@@ -23,6 +23,7 @@ from dataclasses import dataclass, field, fields
 from lerobot.configs import FeatureType, NormalizationMode, PreTrainedConfig
 from lerobot.optim import AdamWConfig
 
+from ...scene.cameras import DEFAULT_IMAGE_SIZE
 from ..common.config import default_normalization_mapping, require_images_and_action
 from ..common.language import MINILM_DIM
 from .film_efficientnet import BACKBONES
@@ -59,7 +60,7 @@ PRESETS: dict[str, dict] = {
     "small": dict(
         backbone="tiny",
         pretrained_backbone=False,
-        image_size=84,
+        image_size=DEFAULT_IMAGE_SIZE,  # the env's default: frames are not resized
         token_dim=128,
         dim=128,
         layers=2,

@@ -5,6 +5,7 @@ from __future__ import annotations
 import torch
 from lerobot.configs import FeatureType, PolicyFeature
 
+from ...scene.cameras import DEFAULT_IMAGE_SIZE
 from .configuration_rt1 import PRESETS, RT1Config
 from .modeling_rt1 import RT1Policy
 
@@ -12,7 +13,10 @@ from .modeling_rt1 import RT1Policy
 def parameter_counts(preset: str, cameras: int = 1, action_dim: int = 4) -> dict[str, int]:
     """Parameters of the whole policy and of its parts, for ``cameras`` cameras and ``action_dim`` actions."""
     torch.manual_seed(0)
-    features = {f"observation.images.cam{i}": PolicyFeature(FeatureType.VISUAL, (3, 84, 84)) for i in range(cameras)}
+    features = {
+        f"observation.images.cam{i}": PolicyFeature(FeatureType.VISUAL, (3, DEFAULT_IMAGE_SIZE, DEFAULT_IMAGE_SIZE))
+        for i in range(cameras)
+    }
     config = RT1Config(
         preset=preset,
         device="cpu",
