@@ -22,6 +22,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 from ..core.checks import check_choice
+from .paper import PAPER_PAIR_TOLERANCE
 
 CLAIM_KINDS = ("gap_opens", "gap_exceeds", "ordering", "trend", "pair", "method_shrinks")
 TREND_OVER = ("n", "radius")
@@ -45,7 +46,7 @@ class ClaimConfig:
     direction: str = "shrinks"
     pair: str | None = None
     relation: str = "within"
-    tolerance: float = 0.06
+    tolerance: float = PAPER_PAIR_TOLERANCE
     baseline: str | None = None
 
     def validate(self, methods: list[str], tasks: list[str], factors: list[str], pairs: list[str]) -> None:

@@ -37,7 +37,6 @@ from .aggregate import Cells, cell_gaps, cells, main_grid, radius_rows
 from .claim_config import ClaimConfig
 from .config import StudyConfig
 from .metrics import group_mean, nanmean, ols_slope, pair_metric_array, percentile_interval, pooled_rates
-from .paper import PAPER_PAIR_TOLERANCE
 from .power import difference_resolvable, mean_resolvable_gap, pair_metric_resolvable, slope_resolvable
 
 ALPHA = 0.05
@@ -277,7 +276,7 @@ def _pair_comparisons(claim: ClaimConfig, method: str, rows: Sequence[dict]) -> 
 
     p_min = min(_pooled(table, ca), _pooled(table, cb))
     m = _cells_per_side(table, cab)
-    tol = claim.tolerance if claim.tolerance is not None else PAPER_PAIR_TOLERANCE
+    tol = claim.tolerance
 
     def resolvable(e: float, z: float) -> float:
         return pair_metric_resolvable(max(1, round(m * e)), p_min, z) if p_min > 0 else math.nan
