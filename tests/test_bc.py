@@ -302,7 +302,9 @@ def test_instruction_embedding_can_condition_the_head():
 # --- real lerobot-train / lerobot-eval -------------------------------------------------------------
 
 
-def train(run_lerobot, dataset: Path, out: Path, steps: int, *policy_args: str) -> list[float]:
+def train(run_lerobot, dataset: Path, out: Path, steps: int, *policy_args: str, save_freq: int = 0) -> list[float]:
+    """``lerobot-train`` of bc on ``dataset`` for ``steps`` steps (a checkpoint every ``save_freq``, default: at
+    the end); the losses it logged."""
     proc = run_lerobot(
         "lerobot-train",
         "--policy.type=bc",
@@ -314,7 +316,7 @@ def train(run_lerobot, dataset: Path, out: Path, steps: int, *policy_args: str) 
         "--batch_size=8",
         "--num_workers=0",
         f"--log_freq={max(1, steps // 4)}",
-        f"--save_freq={steps}",
+        f"--save_freq={save_freq or steps}",
         "--seed=0",
         f"--output_dir={out}",
         *policy_args,
@@ -336,16 +338,37 @@ def test_lerobot_train_conv_with_shift_and_color(tiny_dataset, tmp_path, run_ler
 
 @pytest.mark.slow
 @pytest.mark.parametrize("encoder", ["lite0", "clip_rn50", "r3m_rn50"])
-def test_lerobot_train_frozen_encoder_then_lerobot_eval_without_its_weights_file(
+def test_lerobot_train_trains_the_head_and_not_the_frozen_encoder_then_lerobot_eval_without_its_weights_file(
     tiny_dataset, weights, tmp_path, encoder, run_lerobot, eval_one_light_episode
 ):
+    """Across a training step every tensor of the head (and of the BatchNorm after the backbone) changes and
+    every tensor of the frozen backbone, its BatchNorm statistics included, stays the published weights."""
+    from safetensors.torch import load_file
+
     args = [f"--policy.encoder={encoder}"]
     if encoder in weights:
         copy = tmp_path / weights[encoder][0].name
         copy.write_bytes(weights[encoder][0].read_bytes())
         args.append(f"--policy.encoder_weights_path={copy}")
-    losses = train(run_lerobot, tiny_dataset, tmp_path / "train", 4, *args)
-    assert losses and all(loss == loss for loss in losses)
+        published = weights[encoder][1]
+    else:
+        published = build_backbone(encoder, None, load_weights=True).net.state_dict()  # the packaged ImageNet weights
+    losses = train(run_lerobot, tiny_dataset, tmp_path / "train", 2, *args, save_freq=1)
+    assert len(losses) == 2 and all(loss == loss for loss in losses)
+    step1, step2 = (
+        load_file(tmp_path / "train" / "checkpoints" / f"{step:06d}" / "pretrained_model" / "model.safetensors")
+        for step in (1, 2)
+    )
+    assert step1.keys() == step2.keys()
+    backbone = "model.encoder.backbone.net."
+    frozen = {k[len(backbone) :]: v for k, v in step2.items() if k.startswith(backbone)}
+    assert frozen.keys() == published.keys()
+    for name, tensor in frozen.items():
+        assert torch.equal(tensor, published[name]) and torch.equal(step1[backbone + name], tensor), name
+    trained = [k for k in step2 if k.startswith(("model.head.", "model.encoder.norm.")) and "num_batches" not in k]
+    assert len(trained) == 6 + 4  # 3 linear layers' weights and biases; the norm's weight, bias and statistics
+    for name in trained:
+        assert not torch.equal(step1[name], step2[name]), name
     if encoder != "r3m_rn50":
         return  # one lerobot-eval run is enough: every encoder reloads through the same from_pretrained
     copy.unlink()
