@@ -8,7 +8,8 @@ Commands:
     contact-sheet   render a task under every factor (PNG)
     collect         scripted demos -> LeRobotDataset with per-episode factor values (resumable)
     rt1-presets     the RT-1 presets and their parameter counts
-    study           the generalization-gap study: collect, train, evaluate, report (--config=FILE.yaml, --dry-run)
+    study           the generalization-gap study: collect, train, evaluate, report (--config=NAME or FILE.yaml, --dry-run)
+    configs         the study configs that ship with the package (--config=NAME) and their --dry-run cost
     profile         an existing checkpoint under every factor, written as a study (--policy.path=DIR --task=TASK)
     report          regenerate a study's report.md and plots from its results.csv alone (--results=CSV)
 
@@ -34,6 +35,7 @@ from .factors.registry import FACTORS, PAPER_STUDY_FACTORS, check_factors, suppo
 from .factors.values import save_configs
 from .protocol.sampling import SamplingOptions, sample_configs
 from .scene.cameras import CAMERAS
+from .study.named import resolve_study_config, study_names
 from .tasks import TASKS, check_tasks
 
 if TYPE_CHECKING:  # the study stack imports LeRobot: only where a command needs it
@@ -152,7 +154,7 @@ def cmd_study(args: list[str]) -> None:
     from .study.runner import run_study  # noqa: PLC0415
 
     command = "factorworld study " + " ".join(args)
-    cfg = parse_config(StudyConfig, [_study_alias(arg) for arg in args], "study")
+    cfg = parse_config(StudyConfig, _study_args(args), "study")
     _report_outcome(run_study(cfg, command=command))
 
 
@@ -162,7 +164,7 @@ def cmd_profile(args: list[str]) -> None:
     from .study.runner import run_study  # noqa: PLC0415
 
     command = "factorworld profile " + " ".join(args)
-    cfg = parse_config(ProfileConfig, [_study_alias(arg) for arg in args], "profile")
+    cfg = parse_config(ProfileConfig, _study_args(args), "profile")
     study = cfg.study()
     if cfg.dataset_root:
         print(
@@ -195,11 +197,45 @@ def _report_outcome(outcome: StudyOutcome | str) -> None:
         )
 
 
-def _study_alias(arg: str) -> str:
-    name, sep, value = arg.partition("=")
-    if name == "--config":
-        return f"--config_path={value}" if sep else "--config_path"
-    return STUDY_FLAG_ALIASES.get(arg, arg)
+def _study_args(args: list[str]) -> list[str]:
+    """The study's command line for draccus: flag aliases spelled out, and ``--config NAME`` (or ``=NAME``, or
+    ``--config_path``) as the YAML file it names."""
+    out, i = [], 0
+    while i < len(args):
+        name, sep, value = args[i].partition("=")
+        if name in ("--config", CONFIG_PATH_FLAG) and not sep and i + 1 < len(args):
+            name, sep, value = name, "=", args[i + 1]
+            i += 1
+        if name in ("--config", CONFIG_PATH_FLAG) and sep:
+            out.append(f"{CONFIG_PATH_FLAG}={_study_config(value)}")
+        else:
+            out.append(STUDY_FLAG_ALIASES.get(args[i], args[i]))
+        i += 1
+    return out
+
+
+def _study_config(value: str) -> str:
+    """A study config's file: a path, or the name of one that ships with the package (``quick``)."""
+    try:
+        return resolve_study_config(value)
+    except ValueError as err:
+        raise SettingError(str(err)) from None
+
+
+def cmd_configs(args: list[str]) -> None:
+    """The packaged study configs by name, each with its ``--dry-run`` estimate on this machine's kind (2 cores)."""
+    no_settings("configs", args)
+    # the study's config checks its policies with LeRobot (~4 s): only when this command runs
+    from .study.config import StudyConfig  # noqa: PLC0415
+    from .study.cost import estimate  # noqa: PLC0415
+    from .study.plan import make_plan  # noqa: PLC0415
+
+    print(f"{'name':40s} {'steps':>6s} {'2 cores':>8s} {'1 GPU':>7s}  (--dry-run's estimates, from nothing cached)")
+    for name in study_names():
+        cfg = parse_config(StudyConfig, [f"{CONFIG_PATH_FLAG}={resolve_study_config(name)}"], "study")
+        plan = make_plan(cfg)
+        cpu, gpu = list(estimate(plan, plan.steps, cfg.execution).values())[:2]
+        print(f"{name:40s} {len(plan.steps):6d} {cpu:7.1f}h {gpu:6.1f}h")
 
 
 @dataclass
@@ -260,6 +296,7 @@ COMMANDS: dict[str, Callable[[list[str]], None]] = {
     "collect": cmd_collect,
     "rt1-presets": cmd_rt1_presets,
     "study": cmd_study,
+    "configs": cmd_configs,
     "profile": cmd_profile,
     "report": cmd_report,
 }
