@@ -117,7 +117,7 @@ class RayExecutor:
         try:  # deliberately here: ray is an optional dependency, needed only by this executor
             import ray  # noqa: PLC0415
         except ImportError:
-            raise ValueError("executor=ray needs the ray package: pip install 'ray>=2.40'") from None
+            raise ValueError("executor=ray needs Ray: pip install 'lerobot_env_factorworld[ray]'") from None
         self.ray = ray
         self.study_dir = study_dir
         self.execution = execution
