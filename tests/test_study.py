@@ -9,7 +9,6 @@ import math
 import os
 import re
 import subprocess
-import sys
 from dataclasses import replace
 from pathlib import Path
 
@@ -20,7 +19,6 @@ from lerobot_factorworld.protocol.coverage import coverage
 from lerobot_factorworld.study import metrics, paper
 
 ROOT = Path(__file__).resolve().parents[1]
-FACTORWORLD = Path(sys.executable).with_name("factorworld")
 
 # --- metrics ------------------------------------------------------------------------------------
 
@@ -455,6 +453,17 @@ def test_toy_study_end_to_end(toy):
     for plot in outcome.plots:
         assert plot.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and plot.stat().st_size > 5000
         assert f"]({plot.name})" in report
+    # Every evaluation recorded its episodes (eval.record_episodes 3 >= its 2): paired by index across conditions.
+    manifest = json.loads((outcome.results.parent / "episodes" / "episodes.json").read_text())
+    assert len(manifest) == len(rows) * 2
+    by_cell = {(e["n_train_envs"], e["condition"], e["index"]): e for e in manifest}
+    for e in manifest:
+        assert (outcome.results.parent / e["video"]).stat().st_size > 500
+        twin = by_cell[(e["n_train_envs"], "train", e["index"])]
+        assert twin["episode_seed"] == e["episode_seed"] == 1000 + e["index"]
+    row_of = {(int(r["n_train_envs"]), r["condition"]): r for r in rows}
+    for (n, condition), row in row_of.items():
+        assert sum(by_cell[(n, condition, i)]["success"] for i in range(2)) == int(row["successes"])
 
 
 @TOY_GROUP
@@ -705,11 +714,13 @@ def test_a_study_collects_and_evaluates_at_the_quality_it_names(toy, tmp_path, m
 # --- command line -------------------------------------------------------------------------------
 
 
-def _factorworld(*args: str) -> subprocess.CompletedProcess:
-    return subprocess.run([str(FACTORWORLD), *args], capture_output=True, text=True, timeout=300)
+def test_cli_dry_run_and_one_line_errors(tmp_path, run_main):
+    """``factorworld study`` run in this process (the installed command's one-line errors: test_cli.py)."""
+    from lerobot_factorworld.cli import main
 
+    def _factorworld(*args: str) -> subprocess.CompletedProcess:
+        return run_main(["factorworld", *args], main)
 
-def test_cli_dry_run_and_one_line_errors(tmp_path):
     _, path = _toy_config(tmp_path / "toy")
     result = _factorworld("study", "--config", str(path), "--dry-run")
     assert result.returncode == 0, result.stderr

@@ -46,7 +46,7 @@ import weakref
 from collections import OrderedDict
 from collections.abc import Sequence
 from dataclasses import fields, replace
-from typing import Any
+from typing import Any, Protocol
 
 import gymnasium as gym
 import numpy as np
@@ -133,6 +133,8 @@ class FactorWorldEnv(gym.Env):
         self._episode_factors: dict[str, Any] = {}
         self._episode_record: dict[str, Any] = {}
         self._env_index = 0
+        self.episode_observer: EpisodeObserver | None = None
+        """Told of every reset and step of this env (e.g. an evaluation recording stages and frames); None: nobody."""
 
     # --- gymnasium API ------------------------------------------------------------------------
 
@@ -156,7 +158,10 @@ class FactorWorldEnv(gym.Env):
         self._episode_record = config.episode_record(object_offset)
         self._stage = StageTracker(stages_of(self.task_spec))  # the furthest stage this episode reaches
         obs = self._observe(scene.metaworld_obs)
-        return obs, self._info(success=False, metaworld_reward=0.0, stage=self._stage.name)
+        info = self._info(success=False, metaworld_reward=0.0, stage=self._stage.name)
+        if self.episode_observer is not None:
+            self.episode_observer.on_reset(self, seed, obs, info)
+        return obs, info
 
     def step(self, action: np.ndarray):
         if self._scene is None:
@@ -171,6 +176,8 @@ class FactorWorldEnv(gym.Env):
         terminated = success and self.terminate_on_success
         truncated = self._steps >= self._max_episode_steps
         info = self._info(success, float(mw_reward), stage)
+        if self.episode_observer is not None:
+            self.episode_observer.on_step(self, obs, terminated, truncated, info)
         return obs, float(success), terminated, truncated, info
 
     def render(self) -> np.ndarray | None:
@@ -356,6 +363,16 @@ _DEFAULTS: dict[str, Any] = {
     "distractors": (),
 }
 assert set(_DEFAULTS) | {"object_pos"} == set(FACTORS)
+
+
+class EpisodeObserver(Protocol):
+    """What an env's ``episode_observer`` is told: each reset (with its seed, ``None`` for an unseeded one) and
+    each step, after the env computed them. Set on an instance (``env.unwrapped.episode_observer``), so one
+    evaluation's records never see another env's episodes."""
+
+    def on_reset(self, env: FactorWorldEnv, seed: int | None, obs: dict, info: dict) -> None: ...
+
+    def on_step(self, env: FactorWorldEnv, obs: dict, terminated: bool, truncated: bool, info: dict) -> None: ...
 
 
 def _close_scenes(scenes: OrderedDict[tuple, CompiledScene]) -> None:

@@ -20,7 +20,7 @@ from typing import Any
 
 import draccus
 
-from ..core.checks import check_choice
+from ..core.checks import check_at_least, check_choice
 from ..core.io import atomic_write_json
 from ..datasets.hub import check_hub_repo_id
 from ..envs.lerobot_obs import FACTORWORLD_OBS, LEROBOT_METAWORLD_OBS, check_lerobot_task, check_obs_mode
@@ -374,6 +374,9 @@ class EvalSettings:
             actions' last bits, though not the quick study's successes, and is slower on CPU: docs/study.md,
             Throughput); 1 (one at a time) keeps every key it always had.
         threads: Torch CPU threads per evaluation (not in the key).
+        record_episodes: Episodes per condition and checkpoint whose frames are kept as videos (the first ones:
+            episode i of every condition starts the object at the same place), for report.html's paired
+            viewer; 0: none. Not in the key (frames change no result): a step cached without videos keeps none.
     """
 
     n_test_envs: int = 10
@@ -384,8 +387,10 @@ class EvalSettings:
     device: str = "cpu"
     batch_size: int = 1
     threads: int = 1
+    record_episodes: int = 3
 
     def __post_init__(self) -> None:
+        check_at_least("eval.record_episodes", self.record_episodes, 0)
         self.max_episode_steps_per_task = per_task_setting(
             "eval.max_episode_steps_per_task", self.max_episode_steps_per_task
         )

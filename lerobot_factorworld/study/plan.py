@@ -17,6 +17,7 @@ from ..protocol.conditions import TRAIN_SUITE
 from .checkpoint import GIVEN_CHECKPOINT, keyed_checkpoint
 from .config import RADII_M, MethodConfig, StudyConfig, map_arg_paths, map_policy_paths
 from .inputs import OWN_FRAMES, CollectInputs, EnvInputs, EvalInputs, TrainInputs
+from .recording import RECORD_SETTING
 from .steps import RUN, Step, versions
 
 DEFAULT_WIDTHS = "default"
@@ -162,9 +163,10 @@ def _train_step(
 
 
 def _eval_step(cfg: StudyConfig, condition: str, train: Step, collect: Step, labels: dict) -> Step:
-    """One condition of one checkpoint; threads do not change results (kept out of the key), and ``train`` (the
+    """One condition of one checkpoint; threads and recorded episodes do not change results (kept out of the key),
+    and ``train`` (the
     dataset's own environments) does not depend on ``n_test_envs``."""
-    run = {"threads": cfg.eval.threads}
+    run = {"threads": cfg.eval.threads, RECORD_SETTING: cfg.eval.record_episodes}
     inputs = _eval_inputs(cfg, condition, labels["task"])
     return Step("eval", inputs.to_dict(), (train.key, collect.key), {**labels, "condition": condition, RUN: run})
 
@@ -174,7 +176,7 @@ def _given_eval_step(
 ) -> Step:
     """One condition of a given checkpoint: no dependency; the key holds the checkpoint's content hash
     (``keyed``) and the environments (where the checkpoint lies travels in ``run``)."""
-    run = {"threads": cfg.eval.threads, GIVEN_CHECKPOINT: checkpoint}
+    run = {"threads": cfg.eval.threads, RECORD_SETTING: cfg.eval.record_episodes, GIVEN_CHECKPOINT: checkpoint}
     inputs = replace(_eval_inputs(cfg, condition, labels["task"]), checkpoint=keyed[checkpoint], environments=env)
     return Step("eval", inputs.to_dict(), (), {**labels, "condition": condition, RUN: run})
 

@@ -23,6 +23,7 @@ from ..core.io import atomic_write_text
 from ..core.settings import parse_config
 from ..families import family_of
 from .config import RUN_CONFIG_FILE, StudyConfig, write_run_config
+from .episode_videos import collect_videos
 from .episodes import EPISODES_FILE, episode_rows, write_episodes
 from .family_report import FamilyReport, report_of
 from .markdown import REPORT_FILE, render
@@ -51,6 +52,7 @@ def write_report(cfg: StudyConfig, plan: Plan, study_dir: str | Path, command: s
     write_episodes(episode_rows(cfg, evaluations, study_dir), study_dir / EPISODES_FILE)
     for family in families_of(cfg):
         family.write_report_files(cfg=cfg, evaluations=evaluations, study_dir=study_dir)
+    collect_videos(evaluations, study_dir)  # the recorded episodes, for report.html's paired viewer
     timing = profile_markdown(plan, study_dir)  # last: it is about the run, not the results
     report, plots = render_report(cfg, read_results(csv_path), study_dir, command, len(plan.of_kind("eval")), timing)
     return csv_path, report, plots

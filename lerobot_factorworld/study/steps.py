@@ -40,13 +40,13 @@ from ..core.io import atomic_write_text
 from ..core.memory import keep_freed_memory
 from ..core.timing import Timings
 from ..datasets.merge import merge_datasets
-from ..envs.stages import STAGE_KEY
 from ..families import family_of
 from ..protocol.conditions import fingerprint
 from ..protocol.coverage import coverage
 from .checkpoint import GIVEN_CHECKPOINT, checkpoint_folder
 from .eval_env import eval_env_config
 from .inputs import MERGED_FRAMES, CollectInputs, EvalInputs, TrainInputs
+from .recording import RECORD_SETTING, RECORDED_KEY, EpisodeRecorder, write_recorded
 
 KINDS = ("collect", "train", "eval")
 STEP_FORMAT = 2  # bump when a step's meaning changes: every key changes with it (2: versions, content hashes)
@@ -561,7 +561,6 @@ def _run_eval(step: Step, folder: Path, deps: list[Path]) -> dict[str, Any]:
         from lerobot.envs.factory import make_env, make_env_pre_post_processors  # noqa: PLC0415
         from lerobot.scripts.lerobot_eval import eval_policy_all  # noqa: PLC0415
 
-        from ..envs.factor_env import FactorWorldEnv  # noqa: PLC0415
         from ..envs.runtime import CompiledScene  # noqa: PLC0415
 
     inputs, run = EvalInputs.from_dict(step.inputs), step.run
@@ -584,18 +583,21 @@ def _run_eval(step: Step, folder: Path, deps: list[Path]) -> dict[str, Any]:
     with timings.span("env_build"):
         env_pre, env_post = make_env_pre_post_processors(env_cfg=env_cfg, policy_cfg=policy_cfg)
         envs = make_env(env_cfg, n_envs=inputs.batch_size or 1, use_async_envs=False)
+    # Stages, lengths and the first episodes' frames, from the envs' own observer hook (instances only).
+    recorded = range(inputs.start_seed, inputs.start_seed + min(run.get(RECORD_SETTING, 0), inputs.episodes))
+    recorder = EpisodeRecorder(frozenset(recorded))
     # timed, unchanged (each part exclusive of the parts inside it): scene compilation and rendering, the
-    # environments' resets and steps, the policy's actions, the rest of LeRobot's rollout loop
-    with (
-        timings.wrap(CompiledScene, "__init__", "scene_compile"),
-        timings.wrap(CompiledScene, "render_all", "render"),
-        timings.wrap(FactorWorldEnv, "reset", "env_reset"),
-        timings.wrap(FactorWorldEnv, "step", "env_step"),
-        timings.wrap(policy, "select_action", "policy"),
-        timings.span("rollout_other"),
-        episode_stages(FactorWorldEnv) as ends,
-        torch.no_grad(),
-    ):
+    # environments' resets and steps (on these env instances), the policy's actions, the rest of LeRobot's rollout
+    with contextlib.ExitStack() as stack:
+        for env in _factorworld_envs(envs):
+            env.episode_observer = recorder  # stages, lengths and the first episodes' frames, from the env's hook
+            stack.enter_context(timings.wrap(env, "reset", "env_reset"))
+            stack.enter_context(timings.wrap(env, "step", "env_step"))
+        stack.enter_context(timings.wrap(CompiledScene, "__init__", "scene_compile"))
+        stack.enter_context(timings.wrap(CompiledScene, "render_all", "render"))
+        stack.enter_context(timings.wrap(policy, "select_action", "policy"))
+        stack.enter_context(timings.span("rollout_other"))
+        stack.enter_context(torch.no_grad())
         info = eval_policy_all(
             envs,
             policy,
@@ -617,8 +619,8 @@ def _run_eval(step: Step, folder: Path, deps: list[Path]) -> dict[str, Any]:
             "condition": inputs.condition,
             "successes": successes,
             "seeds": seeds,
-            "stages": of_seeds(ends.stages, seeds),  # the furthest stage of every episode (envs/stages.py)
-            "lengths": of_seeds(ends.lengths, seeds),  # steps of every episode
+            "stages": of_seeds(recorder.stages, seeds),  # the furthest stage of every episode (envs/stages.py)
+            "lengths": of_seeds(recorder.lengths, seeds),  # steps of every episode
             "n_envs": len(configs),
             "envs_visited": cover.visited,
             "equal_visits": cover.equal,
@@ -626,49 +628,21 @@ def _run_eval(step: Step, folder: Path, deps: list[Path]) -> dict[str, Any]:
             "checkpoint": checkpoint,
             "policy_type": policy_cfg.type,  # a given checkpoint's type is known from it only
         }
+        if recorder.frames:  # the recorded episodes' frames as videos (not results: they change no number)
+            fps = next(_factorworld_envs(envs)).metadata["render_fps"]
+            result[RECORDED_KEY] = write_recorded(recorder, seeds, folder, fps)
         family = family_of(task)
         if family.content_key:  # what every episode asked for (e.g. instruction, named object), for breakdowns
             result[family.content_key] = family.episode_records(configs, seeds, width)
     return result
 
 
-@dataclass
-class EpisodeEnds:
-    """What :func:`episode_stages` records, by reset seed: the furthest stage and the number of steps."""
-
-    stages: dict[int, str] = field(default_factory=dict)
-    lengths: dict[int, int] = field(default_factory=dict)
-
-
-@contextlib.contextmanager
-def episode_stages(env_class: type) -> Iterator[EpisodeEnds]:
-    """Inside the block: the furthest stage and the length in steps of every episode of an ``env_class`` env
-    that was reset with a seed, by that seed (``info["stage"]`` of its last step). LeRobot's rollout keeps only
-    each episode's success, so they are read off the environments' own steps; an episode begun by an autoreset
-    (no seed), which the rollout discards, is not recorded. The evaluation's environments run in this process
-    (synchronous)."""
-    ends = EpisodeEnds()
-    seed_of: dict[int, int | None] = {}  # id(env) -> the seed of its current episode
-    steps_of: dict[int, int] = {}  # id(env) -> steps of its current episode
-    reset, step = env_class.reset, env_class.step
-
-    def recording_reset(env, *, seed=None, options=None):
-        seed_of[id(env)], steps_of[id(env)] = seed, 0
-        return reset(env, seed=seed, options=options)
-
-    def recording_step(env, action):
-        out = step(env, action)
-        steps_of[id(env)] = steps_of.get(id(env), 0) + 1
-        seed = seed_of.get(id(env))
-        if seed is not None and (out[2] or out[3]) and seed not in ends.stages:
-            ends.stages[seed], ends.lengths[seed] = out[4][STAGE_KEY], steps_of[id(env)]
-        return out
-
-    env_class.reset, env_class.step = recording_reset, recording_step
-    try:
-        yield ends
-    finally:
-        env_class.reset, env_class.step = reset, step
+def _factorworld_envs(envs: dict) -> Iterator[Any]:
+    """The Factor World envs of LeRobot's ``{suite: {task_id: vector env}}`` (synchronous, in this process)."""
+    for suite in envs.values():
+        for vector_env in suite.values():
+            for env in vector_env.envs:
+                yield env.unwrapped
 
 
 def of_seeds[T](recorded: dict[int, T], seeds: list[int]) -> list[T]:
