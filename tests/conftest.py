@@ -297,8 +297,8 @@ EXPECTED_SECONDS = {
     "toy_study": 90.0,  # the xdist group of tests/test_study.py's toy study (local, rerun, reuse, a part on Ray)
     "tests/test_lerobot_metaworld_obs.py::test_round_trip_from_lerobots_own_metaworld_data": 128.0,
     "tests/test_throughput.py::test_bench_study_quick_runs_both_executions_with_identical_results": 69.0,
-    "tests/test_bench_scripts.py::test_bench_script_quick_prints_ratio_last[collect]": 54.0,
-    "tests/test_bench_scripts.py::test_bench_script_quick_prints_ratio_last[bc]": 46.0,
+    "tests/test_bench_scripts.py::test_bench_script_prints_consistent_rows_and_the_ratio_last[collect]": 54.0,
+    "tests/test_bench_scripts.py::test_bench_script_prints_consistent_rows_and_the_ratio_last[bc]": 46.0,
     "tests/test_pick.py::test_expert_succeeds_in_default_scenes_and_under_physical_shifts": 28.0,
     "tests/test_lerobot_metaworld_obs.py::test_the_docs_comparison_script_finds_lerobots_frames_and_states": 26.0,
     "tests/test_datasets.py::test_lerobot_train_runs_on_the_collected_dataset": 16.0,  # its dataset fixture: 12
@@ -312,7 +312,7 @@ EXPECTED_SECONDS = {
     "tests/test_docs_results.py::test_every_committed_report_and_fenced_docs_table_is_what_its_results_csv_regenerates": 16.0,
     "tests/test_profile.py::test_profile_of_a_lerobot_metaworld_checkpoint": 16.0,
     "tests/test_rt1.py::test_lerobot_train_lowers_the_loss_and_lerobot_eval_runs_the_checkpoint": 15.0,
-    "tests/test_bench_scripts.py::test_bench_script_quick_prints_ratio_last[malloc]": 14.0,
+    "tests/test_bench_scripts.py::test_bench_script_prints_consistent_rows_and_the_ratio_last[malloc]": 14.0,
     "tests/test_compat.py::test_dataset_sidecars_are_byte_identical[sidecar_door-open.json]": 15.0,
     "tests/test_compat.py::test_dataset_sidecars_are_byte_identical[sidecar_pick.json]": 15.0,
     "tests/test_profile.py::test_profile_writes_a_studys_outputs_without_collecting_or_training": 13.0,
@@ -321,7 +321,7 @@ EXPECTED_SECONDS = {
     "tests/test_bc.py::test_lerobot_train_trains_the_head_and_not_the_frozen_encoder_then_lerobot_eval_without_its_weights_file[clip_rn50]": 10.0,
     "tests/test_experts.py::test_expert_solves_default_and_each_physical_shift[pick]": 10.0,
     "tests/test_pick.py::test_episodes_are_paired_across_conditions_even_when_a_shift_pins_the_object_position": 10.0,
-    "tests/test_bench_scripts.py::test_bench_script_quick_prints_ratio_last[env]": 9.0,
+    "tests/test_bench_scripts.py::test_bench_script_prints_consistent_rows_and_the_ratio_last[env]": 9.0,
     "tests/test_datasets.py::test_offline_push_fails_clearly_and_loses_nothing": 9.0,
 }
 SLOW_DEFAULT = 10.0
