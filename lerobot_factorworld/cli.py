@@ -12,6 +12,9 @@ Commands:
     configs         the study configs that ship with the package (--config=NAME) and their --dry-run cost
     profile         an existing checkpoint under every factor, written as a study (--policy.path=DIR --task=TASK)
     report          regenerate a study's report.md and plots from its results.csv alone (--results=CSV)
+    compare-gaps    one factor's gap in two studies and their difference (--first=DIR --second=DIR --factor=F --task=T)
+    compare-reruns  does a rerun land within the intervals of the results it repeats (--first=DIR --rerun=DIR)
+    sync-docs       regenerate the committed reports under docs/results and the docs tables fenced from them (--check)
 
 Every command reads its settings with :func:`lerobot_factorworld.core.settings.parse_config` (draccus +
 the config's ``__post_init__`` validation), so a bad setting ends in one ``error: ...`` line naming the
@@ -25,6 +28,7 @@ import sys
 import typing
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import TYPE_CHECKING
 
 from .contact_sheet import ContactSheetConfig, render_contact_sheet
@@ -287,6 +291,140 @@ def _report_args(args: list[str]) -> list[str]:
     return out
 
 
+@dataclass
+class CompareGapsConfig:
+    """``factorworld compare-gaps``: one factor's gap in two studies (each one method on one task, at one N) and
+    their difference, each with its seed-level bootstrap 95% interval, over the training seeds both hold
+    (``study/compare.py``).
+
+    Attributes:
+        first: A study folder (or its ``results.csv``).
+        second: Another study folder (or its ``results.csv``).
+        factor: The shifted condition, e.g. ``object_texture``.
+        task: The task on both sides.
+        method: The method on both sides (the first's, when ``second_method`` is given).
+        second_method: The second study's method, if another.
+        n_train_envs: N on both sides (needed where a study has several).
+    """
+
+    first: str = ""
+    second: str = ""
+    factor: str = ""
+    task: str = ""
+    method: str = "bc"
+    second_method: str | None = None
+    n_train_envs: int | None = None
+
+    def __post_init__(self) -> None:
+        for name in ("first", "second", "factor", "task"):
+            if not getattr(self, name):
+                raise ValueError(f"compare-gaps needs --{name}")
+        for name in ("first", "second"):
+            check_input_file(_results_file(getattr(self, name)), name)
+
+
+def _results_file(folder_or_csv: str) -> str:
+    from .study.results import RESULTS_FILE  # noqa: PLC0415 - the study stack loads only for the commands that read one
+
+    path = Path(folder_or_csv)
+    return str(path / RESULTS_FILE if path.is_dir() else path)
+
+
+def cmd_compare_gaps(args: list[str]) -> None:
+    # the study's statistics (numpy only, but through the study package): only when this command runs
+    from .study.compare import Side, comparison_lines  # noqa: PLC0415
+    from .study.results import read_results  # noqa: PLC0415
+
+    cfg = parse_config(CompareGapsConfig, args, "compare-gaps")
+    sides = (
+        Side(cfg.method, cfg.task, cfg.n_train_envs),
+        Side(cfg.second_method or cfg.method, cfg.task, cfg.n_train_envs),
+    )
+    first, second = (read_results(_results_file(p)) for p in (cfg.first, cfg.second))
+    try:
+        lines = comparison_lines((cfg.first, first), (cfg.second, second), cfg.factor, sides)
+    except ValueError as err:  # a method, task or factor the studies lack: the command line was wrong
+        raise SettingError(str(err)) from None
+    print("\n".join(lines))
+
+
+@dataclass
+class CompareRerunsConfig:
+    """``factorworld compare-reruns``: every evaluation step two runs both made (same key), per cell the first
+    run's successes with its Wilson 95% interval, the rerun's, whether the rerun lies within it and its gap within
+    the first's paired interval, and (with ``episodes.parquet`` on both sides) how many episodes end alike. Exit
+    status 1 when a cell lies outside (``study/rerun.py``).
+
+    Attributes:
+        first: The first run's folder (holds ``results.csv``).
+        rerun: The rerun's folder.
+    """
+
+    first: str = ""
+    rerun: str = ""
+
+    def __post_init__(self) -> None:
+        for name in ("first", "rerun"):
+            if not getattr(self, name):
+                raise ValueError(f"compare-reruns needs --{name}")
+            folder = Path(getattr(self, name))
+            if not folder.is_dir():
+                raise FileNotFoundError(f"{name} {folder} is not a study folder")
+            check_input_file(_results_file(str(folder)), name)
+
+
+def cmd_compare_reruns(args: list[str]) -> None:
+    # reading episodes.parquet and the study's statistics: only when this command runs
+    from .study.episodes import EPISODES_FILE, read_episodes  # noqa: PLC0415
+    from .study.rerun import compare_reruns, rerun_lines  # noqa: PLC0415
+    from .study.results import read_results  # noqa: PLC0415
+
+    cfg = parse_config(CompareRerunsConfig, args, "compare-reruns")
+    folders = [Path(cfg.first), Path(cfg.rerun)]
+    episodes = [read_episodes(f / EPISODES_FILE) if (f / EPISODES_FILE).is_file() else [] for f in folders]
+    found = compare_reruns(*(read_results(_results_file(str(f))) for f in folders), *episodes)
+    print("\n".join(rerun_lines(found)))
+    if found.within != len(found.cells):
+        raise SystemExit(FAILURE_STATUS)
+
+
+@dataclass
+class SyncDocsConfig:
+    """``factorworld sync-docs``: regenerate every committed study report (``docs/results/<study>/``) and rewrite
+    the tables of ``docs/*.md`` fenced from them (``study/published.py``).
+
+    Attributes:
+        check: Change nothing; name what is stale and exit 1 if anything is.
+        root: The repository checkout (default: this folder).
+    """
+
+    check: bool = False
+    root: str = "."
+
+    def __post_init__(self) -> None:
+        if not (Path(self.root) / "docs").is_dir():
+            raise ValueError(f"root {self.root} holds no docs/ folder: run sync-docs in the repository's checkout")
+
+
+def cmd_sync_docs(args: list[str]) -> None:
+    # the study's configs check their policies with LeRobot (~4 s): only when this command runs
+    from .study.published import RESULTS_ROOT, committed_studies, stale_published, sync_published  # noqa: PLC0415
+
+    cfg = parse_config(SyncDocsConfig, ["--check=true" if arg == "--check" else arg for arg in args], "sync-docs")
+    root = Path(cfg.root)
+    if cfg.check:
+        problems = stale_published(root)
+        print("\n".join(problems) or "every committed report and fenced table is current")
+        if problems:
+            raise SystemExit(FAILURE_STATUS)
+        return
+    changed = sync_published(root)
+    studies = ", ".join(committed_studies(root / RESULTS_ROOT)) or "none"
+    print(f"regenerated the committed reports ({studies}); rewrote {len(changed)} docs file(s)")
+    for path in changed:
+        print(f"  {path}")
+
+
 COMMANDS: dict[str, Callable[[list[str]], None]] = {
     "tasks": cmd_tasks,
     "factors": cmd_factors,
@@ -299,6 +437,9 @@ COMMANDS: dict[str, Callable[[list[str]], None]] = {
     "configs": cmd_configs,
     "profile": cmd_profile,
     "report": cmd_report,
+    "compare-gaps": cmd_compare_gaps,
+    "compare-reruns": cmd_compare_reruns,
+    "sync-docs": cmd_sync_docs,
 }
 
 

@@ -5,7 +5,6 @@ results.csv regenerates, and every table fenced in docs/*.md equals its regenera
 The machinery is tested on small committed studies under ``tests/data/results/`` (``quick``: the quick
 study's door-open run; ``pick_toy``: a two-seed pick study with its ``pick_breakdowns.csv``)."""
 
-import importlib.util
 import re
 import shutil
 import subprocess
@@ -33,7 +32,6 @@ from lerobot_factorworld.study.results import read_results
 ROOT = Path(__file__).resolve().parents[1]
 DATA = ROOT / "tests" / "data" / "results"
 FACTORWORLD = Path(sys.executable).with_name("factorworld")
-SYNC = ROOT / "scripts" / "sync_docs_results.py"
 
 
 # --- the repository's own docs and committed results ------------------------------------------------
@@ -78,6 +76,7 @@ def test_every_fenced_block_names_a_committed_study():
             assert fence.study in studies, f"{fence.label()}: no committed results under {RESULTS_ROOT}/{fence.study}/"
 
 
+@pytest.mark.slow
 def test_every_committed_report_and_fenced_docs_table_is_what_its_results_csv_regenerates(tmp_path):
     studies = committed_studies(ROOT / RESULTS_ROOT)
     reports = regenerate_studies(studies, tmp_path)
@@ -264,12 +263,9 @@ def _docs_tree(tmp_path: Path) -> Path:
 
 
 def _sync(run_main, tmp_path: Path, *flags: str) -> subprocess.CompletedProcess:
-    """The sync script run on ``tmp_path``: its ``main()`` in this process (a process would spend ~8 s importing
-    what this module has imported already)."""
-    spec = importlib.util.spec_from_file_location("sync_docs_results", SYNC)
-    script = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(script)
-    return run_main([str(SYNC), f"--root={tmp_path}", *flags], script.main)
+    """``factorworld sync-docs`` run on ``tmp_path``: its ``main()`` in this process (a process would spend ~8 s
+    importing what this module has imported already)."""
+    return run_main(["factorworld", "sync-docs", f"--root={tmp_path}", *flags], main)
 
 
 def test_the_sync_script_rewrites_fenced_tables_and_check_finds_stale_ones(tmp_path, run_main):

@@ -1,4 +1,4 @@
-"""A rerun against the results it repeats (``study/rerun.py``, ``scripts/compare_reruns.py``): cells matched by step
+"""A rerun against the results it repeats (``study/rerun.py``, ``factorworld compare-reruns``): cells matched by step
 key, the rerun's rate and gap checked against the first run's stated intervals, episodes compared one by one."""
 
 from __future__ import annotations
@@ -15,6 +15,7 @@ from lerobot_factorworld.study.metrics import paired_gap, wilson_interval
 from lerobot_factorworld.study.rerun import compare_reruns
 
 ROOT = Path(__file__).resolve().parents[1]
+FACTORWORLD = str(Path(sys.executable).with_name("factorworld"))
 
 
 def row(step, condition, successes, train=None, episodes=20):
@@ -85,7 +86,7 @@ def test_the_committed_rerun_of_f5s_bc_on_a_fresh_machine_lands_within_every_int
     """docs/findings.md (F6) quotes this: F6's `bc` is F5's `bc` on pick-place (same step keys), run again on
     another machine. Every cell lies within F5's intervals; 154 of 160 episodes end alike."""
     proc = subprocess.run(
-        [sys.executable, "scripts/compare_reruns.py", "docs/results/f5_augmentation", "docs/results/f6_pretrained"],
+        [FACTORWORLD, "compare-reruns", "--first=docs/results/f5_augmentation", "--rerun=docs/results/f6_pretrained"],
         capture_output=True,
         text=True,
         cwd=ROOT,
@@ -99,15 +100,15 @@ def test_the_committed_rerun_of_f5s_bc_on_a_fresh_machine_lands_within_every_int
     assert lines[-1] == "within: 8/8"
 
 
-def test_the_script_says_what_is_missing_in_one_line(tmp_path):
+def test_the_command_says_what_is_missing_in_one_line(tmp_path):
     proc = subprocess.run(
-        [sys.executable, "scripts/compare_reruns.py", str(tmp_path), "docs/results/f6_pretrained"],
+        [FACTORWORLD, "compare-reruns", f"--first={tmp_path}", "--rerun=docs/results/f6_pretrained"],
         capture_output=True,
         text=True,
         cwd=ROOT,
         timeout=120,
     )
-    assert proc.returncode == 1 and proc.stderr.strip() == f"error: no results.csv in {tmp_path}"
+    assert proc.returncode == 2 and proc.stderr.strip() == f"error: first {tmp_path}/results.csv does not exist"
 
 
 @pytest.mark.slow

@@ -100,3 +100,27 @@ def compare_gaps(
         return tuple(sorted({r["episodes"] for r in side if r["condition"] == factor and r["seed"] in seeds}))
 
     return GapComparison(factor, tuple(sorted(seeds)), (counts(a), counts(b)), (first_gap, second_gap), difference)
+
+
+def comparison_lines(
+    first: tuple[str, Sequence[dict[str, Any]]],
+    second: tuple[str, Sequence[dict[str, Any]]],
+    factor: str,
+    sides: tuple[Side, Side],
+) -> list[str]:
+    """``factorworld compare-gaps``'s text: each side's gap and the difference (the last line), each with its
+    seed-level bootstrap 95% interval."""
+    result = compare_gaps(first[1], second[1], factor, sides)
+    lines = [
+        f"{factor} on {sides[0].task}, seeds {', '.join(map(str, result.seeds))} (seed-level bootstrap 95% intervals)"
+    ]
+    for name, side, (gap, low, high), counts in zip(
+        (first[0], second[0]), sides, result.gaps, result.episodes, strict=True
+    ):
+        episodes = "-".join(map(str, sorted({counts[0], counts[-1]})))
+        lines.append(
+            f"  {name} ({side.method}, {episodes} episodes per cell): gap {gap:+.3f} [{low:+.3f}, {high:+.3f}]"
+        )
+    difference, low, high = result.difference
+    lines.append(f"difference (first minus second): {difference:+.3f} [{low:+.3f}, {high:+.3f}]")
+    return lines

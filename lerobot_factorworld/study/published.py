@@ -20,6 +20,7 @@ when the section has more than one table, which one (1 = the first)::
 from __future__ import annotations
 
 import re
+import tempfile
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
@@ -206,3 +207,24 @@ def sync_docs(docs: Iterable[Path], reports: Mapping[str, str]) -> list[Path]:
     for path, text in updates.items():
         atomic_write_text(path, text)
     return list(updates)
+
+
+def stale_published(root: Path) -> list[str]:
+    """What is stale in a checkout at ``root``: committed reports that differ from their regeneration, and fenced
+    docs blocks that differ from the reports (``factorworld sync-docs --check``)."""
+    studies = committed_studies(root / RESULTS_ROOT)
+    with tempfile.TemporaryDirectory() as tmp:
+        reports = regenerate_studies(studies, Path(tmp))
+    problems = [
+        f"{folder / REPORT_FILE} is not what its results.csv regenerates"
+        for name, folder in studies.items()
+        if not (folder / REPORT_FILE).is_file() or (folder / REPORT_FILE).read_text() != reports[name]
+    ]
+    return problems + check_docs(doc_files(root / "docs"), reports)
+
+
+def sync_published(root: Path) -> list[Path]:
+    """Regenerate the committed reports in place, then rewrite the fenced docs blocks; the docs files changed
+    (``factorworld sync-docs``)."""
+    reports = regenerate_studies(committed_studies(root / RESULTS_ROOT))
+    return sync_docs(doc_files(root / "docs"), reports)

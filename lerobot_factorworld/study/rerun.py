@@ -122,3 +122,35 @@ def _episodes_by_step(rows: Iterable[dict]) -> dict[str, dict[int, dict]]:
     for row in rows:
         out.setdefault(row["step"], {})[int(row["episode_ix"])] = row
     return out
+
+
+def rerun_lines(found: RerunComparison) -> list[str]:
+    """``factorworld compare-reruns``'s text: one Markdown row per cell both ran, then the counts; the last line
+    is ``within: <cells within>/<cells>``."""
+    lines = [
+        f"{len(found.cells)} evaluation steps in both; {found.only_first} only in the first, {found.only_rerun} "
+        "only in the rerun",
+        "",
+        "| method | task | N | seed | widths | condition | first | rerun | rate within | gap first [95%] | gap rerun | "
+        "gap within | same outcome | same length |",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|",
+    ]
+    for c in found.cells:
+        gap = "—" if c.gap_within is None else f"{c.gaps[0]:+.2f} [{c.gap_interval[0]:+.2f}, {c.gap_interval[1]:+.2f}]"
+        gap_rerun = "—" if c.gap_within is None or math.isnan(c.gaps[1]) else f"{c.gaps[1]:+.2f}"
+        lines.append(
+            "| " + " | ".join(str(v) for v in c.label) + f" | {c.successes[0]}/{c.episodes} [{c.interval[0]:.2f}, "
+            f"{c.interval[1]:.2f}] | {c.successes[1]}/{c.episodes} | {'yes' if c.rate_within else 'NO'} | {gap} | "
+            f"{gap_rerun} | {'—' if c.gap_within is None else ('yes' if c.gap_within else 'NO')} | "
+            f"{'—' if c.same_outcome is None else c.same_outcome} | {'—' if c.same_length is None else c.same_length} |"
+        )
+    with_episodes = [c for c in found.cells if c.same_outcome is not None]
+    lines += ["", f"identical cells (same successes and gap): {found.identical}/{len(found.cells)}"]
+    if with_episodes:
+        total = sum(c.episodes for c in with_episodes)
+        lines.append(
+            f"episodes ending alike: {sum(c.same_outcome for c in with_episodes)}/{total}; "
+            f"identically (same length too): {sum(c.same_length for c in with_episodes)}/{total}"
+        )
+    lines.append(f"within: {found.within}/{len(found.cells)}")
+    return lines
