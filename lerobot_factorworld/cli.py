@@ -155,17 +155,20 @@ STUDY_FLAG_ALIASES = {
 def cmd_study(args: list[str]) -> None:
     # LeRobot and torch (~4 s): `factorworld tasks` and friends stay instant
     from .study.config import StudyConfig  # noqa: PLC0415
-    from .study.runner import run_study  # noqa: PLC0415
+    from .study.runner import inspect_study, run_study  # noqa: PLC0415
 
     command = "factorworld study " + " ".join(args)
     cfg = parse_config(StudyConfig, _study_args(args), "study")
+    if cfg.inspects:  # --dry-run, --profile, --fit_cost: nothing runs
+        print(inspect_study(cfg))
+        return
     _report_outcome(run_study(cfg, command=command))
 
 
 def cmd_profile(args: list[str]) -> None:
     # LeRobot's env config (~4 s): only when this command runs
     from .study.policy_profile import ProfileConfig  # noqa: PLC0415
-    from .study.runner import run_study  # noqa: PLC0415
+    from .study.runner import inspect_study, run_study  # noqa: PLC0415
 
     command = "factorworld profile " + " ".join(args)
     cfg = parse_config(ProfileConfig, _study_args(args), "profile")
@@ -175,14 +178,14 @@ def cmd_profile(args: list[str]) -> None:
             f"train: the {study.n_train_envs[0]} training environment(s) of dataset {cfg.dataset_root} "
             f"(seed {study.seeds[0]}, varying {', '.join(study.train_factors) or 'no factor'})"
         )
+    if study.inspects:
+        print(inspect_study(study))
+        return
     _report_outcome(run_study(study, command=command))
 
 
-def _report_outcome(outcome: StudyOutcome | str) -> None:
+def _report_outcome(outcome: StudyOutcome) -> None:
     """What a study (or a profile) did, in a few lines; failed steps on stderr and a failure status."""
-    if isinstance(outcome, str):  # --dry-run
-        print(outcome)
-        return
     ran = ", ".join(f"{n} {kind}" for kind, n in outcome.ran.items())
     cached = ", ".join(f"{n} {kind}" for kind, n in outcome.cached.items())
     print(f"ran {ran}; cached {cached}")

@@ -491,6 +491,11 @@ class StudyConfig:
 
     # --- derived -----------------------------------------------------------------------------
 
+    @property
+    def inspects(self) -> bool:
+        """Whether this run only inspects the study (``dry_run``, ``profile``, ``fit_cost``): nothing runs."""
+        return self.dry_run or self.profile or self.fit_cost
+
     def trained_methods(self) -> list[MethodConfig]:
         """The methods the study trains (policy settings): they need the collections and trainings."""
         return [m for m in self.methods if m.trains]

@@ -53,15 +53,12 @@ class StudyOutcome:
     pushed: bool = False  # the results went to the Hub (push_to_hub)
 
 
-def run_study(cfg: StudyConfig, command: str | None = None) -> StudyOutcome | str:
-    """Run (or resume) ``cfg``; with ``dry_run``, ``profile`` or ``fit_cost`` return the plan's description,
-    where the finished steps' time went, or what the refitted cost model found, instead (nothing runs).
-
-    Cached steps made by other code are named on stderr first (``dry_run`` too), refused under ``strict``,
-    redone under ``rerun_stale`` (see the module docstring)."""
-    start = time.perf_counter()
-    if not (cfg.dry_run or cfg.profile or cfg.fit_cost):
-        fetch_checkpoints([m.checkpoint for m in cfg.given_methods()])  # before planning: keys hash their files
+def inspect_study(cfg: StudyConfig) -> str:
+    """What ``dry_run``, ``profile`` or ``fit_cost`` asks for, without running anything: the plan's description
+    (steps, cached, cost, power; cached steps made by other code are named on stderr first), where the finished
+    steps' time went, or what the refitted cost model found."""
+    if not cfg.inspects:
+        raise ValueError("inspect_study needs dry_run, profile or fit_cost; run_study runs the study")
     plan = make_plan(cfg)
     study_dir = Path(cfg.out_dir)
     if cfg.dry_run:
@@ -69,8 +66,19 @@ def run_study(cfg: StudyConfig, command: str | None = None) -> StudyOutcome | st
         return describe(cfg, plan)
     if cfg.profile:
         return profile_text(plan, study_dir)
-    if cfg.fit_cost:
-        return fit_cost_model(cfg, plan, study_dir)
+    return fit_cost_model(cfg, plan, study_dir)
+
+
+def run_study(cfg: StudyConfig, command: str | None = None) -> StudyOutcome:
+    """Run (or resume) ``cfg``. Cached steps made by other code are named on stderr first, refused under
+    ``strict``, redone under ``rerun_stale`` (see the module docstring). A config that only inspects
+    (``dry_run``, ``profile``, ``fit_cost``) is :func:`inspect_study`'s, refused here."""
+    if cfg.inspects:
+        raise ValueError("dry_run, profile and fit_cost run nothing: use inspect_study")
+    start = time.perf_counter()
+    fetch_checkpoints([m.checkpoint for m in cfg.given_methods()])  # before planning: keys hash their files
+    plan = make_plan(cfg)
+    study_dir = Path(cfg.out_dir)
     cfg.check_weight_files()  # before any step runs: weights are never downloaded
     check_checkpoints(plan.given_evaluations())  # a given checkpoint that cannot run on its env: one line
     if cfg.push_to_hub:
