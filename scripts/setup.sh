@@ -29,4 +29,14 @@ if ! ldconfig -p 2>/dev/null | grep -q libavcodec; then
     echo "note: install FFmpeg's shared libraries (e.g. apt-get install ffmpeg) for torchcodec" >&2
   fi
 fi
+# Chromium for the test that opens report.html in a real browser (Playwright drives it; its own download
+# cannot work offline).
+if ! command -v chromium >/dev/null; then
+  if command -v apt-get >/dev/null && [ "$(id -u)" = 0 ]; then
+    (apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq chromium >/dev/null) \
+      || echo "warning: could not install chromium (the report's browser test will be skipped)" >&2
+  else
+    echo "note: install Chromium (e.g. apt-get install chromium) for the report's browser test" >&2
+  fi
+fi
 echo "set-up done: $(.venv/bin/python --version), $(.venv/bin/factorworld --help >/dev/null && echo factorworld CLI ok)"
