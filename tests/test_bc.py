@@ -76,7 +76,9 @@ def _write_weight_files(root: Path) -> dict[str, tuple[Path, dict]]:
 
 @pytest.fixture(scope="session")
 def weights(build_once) -> dict[str, tuple[Path, dict]]:
-    """Both weight files, written once per run (every xdist worker reads the same; tests change copies only)."""
+    """Both weight files, written once per run (every xdist worker reads the same; tests change copies only).
+    Building them (two ResNet-50s, one of them open_clip's with its text tower) takes 10-15 s: every test that
+    reads them is marked slow, so ``make test-fast`` never builds them."""
     return build_once("bc_weights", _write_weight_files)
 
 
@@ -170,6 +172,7 @@ def test_eval_mode_applies_no_augmentation(mode):
 # --- pretrained encoders ---------------------------------------------------------------------------
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", ["r3m_rn50", "clip_rn50"])
 def test_frozen_encoder_loads_the_published_file_format(weights, name):
     path, expected = weights[name]
@@ -183,6 +186,7 @@ def test_frozen_encoder_loads_the_published_file_format(weights, name):
     assert backbone(torch.rand(2, 3, 84, 84)).shape == (2, ENCODERS[name][1])
 
 
+@pytest.mark.slow
 def test_r3m_loading_is_strict_and_lists_the_bad_keys(weights, tmp_path):
     path, _ = weights["r3m_rn50"]
     state = torch.load(path, weights_only=True)["r3m"]
@@ -202,6 +206,7 @@ def test_r3m_loading_is_strict_and_lists_the_bad_keys(weights, tmp_path):
     refused({k.replace("module.convnet.", ""): v for k, v in state.items()}, "expected a dict with key 'r3m'")
 
 
+@pytest.mark.slow
 def test_clip_loading_is_strict_and_lists_the_bad_keys(weights, tmp_path):
     path, visual = weights["clip_rn50"]
     prefixed = {f"visual.{k}": v for k, v in visual.items()}
@@ -228,6 +233,7 @@ def test_lite0_uses_the_packaged_imagenet_weights():
     assert trainable == 2 * 1280 + (1280 + 8) * 256 + 256 + 256 * 256 + 256 + 256 * 4 + 4  # BatchNorm + head
 
 
+@pytest.mark.slow
 def test_feature_cache_gives_the_same_loss_and_is_dropped_on_load():
     cached = make_policy(encoder="lite0", feature_cache_size=100)
     plain = make_policy(encoder="lite0", feature_cache_size=0)
@@ -272,6 +278,7 @@ def test_save_then_load_gives_identical_actions(tmp_path):
     assert torch.equal(a, b) and a.shape == (2, 4) and a.abs().max() <= 1
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", ["r3m_rn50", "clip_rn50"])
 def test_checkpoint_reloads_after_its_weights_file_is_deleted(weights, tmp_path, name):
     source, _ = weights[name]

@@ -175,9 +175,12 @@ def test_the_shipped_configs_parse(tmp_path):
     ("args", "expected"),
     [
         (["collect", "--bogus=1"], "unknown setting(s) --bogus"),
-        (["collect", "--n_envs=abc"], "bad value for --n_envs"),
-        (["collect", "--config_path=configs/missing.yaml"], "does not exist"),
-        (["collect", "--sampling.texture_folder=/nonexistent/textures"], "does not exist"),
+        # each a new process importing the command (seconds): the rest of the suite runs them in process
+        pytest.param(["collect", "--n_envs=abc"], "bad value for --n_envs", marks=pytest.mark.slow),
+        pytest.param(["collect", "--config_path=configs/missing.yaml"], "does not exist", marks=pytest.mark.slow),
+        pytest.param(
+            ["collect", "--sampling.texture_folder=/nonexistent/textures"], "does not exist", marks=pytest.mark.slow
+        ),
     ],
 )
 def test_the_installed_command_prints_one_line_and_no_traceback(args, expected):

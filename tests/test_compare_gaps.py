@@ -70,6 +70,7 @@ QUOTED = [
 ]  # fmt: skip
 
 
+@pytest.mark.slow
 def test_the_script_prints_the_differences_findings_quotes_and_refuses_in_one_line():
     script = [sys.executable, str(ROOT / "scripts" / "compare_gaps.py")]
     findings = " ".join((ROOT / "docs" / "findings.md").read_text().split())  # line breaks as spaces

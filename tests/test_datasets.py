@@ -99,6 +99,7 @@ def test_different_settings_are_refused_without_touching_the_dataset(dataset):
     assert before == {p: p.stat().st_mtime_ns for p in root.rglob("*") if p.is_file()}
 
 
+@pytest.mark.slow
 def test_killed_collection_resumes_without_duplicates(tmp_path):
     root = tmp_path / "killed"
     cmd = [
@@ -133,6 +134,7 @@ def test_killed_collection_resumes_without_duplicates(tmp_path):
     assert len(sidecar["environments"]) == 2
 
 
+@pytest.mark.slow
 def test_shards_from_several_machines_merge_keeping_factors(tmp_path):
     from lerobot.datasets.aggregate import aggregate_datasets
 
@@ -148,6 +150,7 @@ def test_shards_from_several_machines_merge_keeping_factors(tmp_path):
     ]
 
 
+@pytest.mark.slow
 def test_offline_push_fails_clearly_and_loses_nothing(dataset, tmp_path):
     import shutil
 
@@ -191,6 +194,7 @@ def test_lerobot_train_runs_on_the_collected_dataset(dataset, tmp_path, run_lero
     assert (tmp_path / "train" / "checkpoints" / "000003" / "pretrained_model" / "model.safetensors").is_file()
 
 
+@pytest.mark.slow
 def test_full_disk_keeps_finished_shards_and_a_rerun_completes(tmp_path, monkeypatch):
     import errno
 
@@ -215,6 +219,7 @@ def test_full_disk_keeps_finished_shards_and_a_rerun_completes(tmp_path, monkeyp
     assert report.episodes == 4
 
 
+@pytest.mark.slow
 def test_several_tasks_in_one_video_dataset_and_append(tmp_path):
     from lerobot.datasets.lerobot_dataset import LeRobotDataset
 

@@ -268,6 +268,7 @@ def _sync(run_main, tmp_path: Path, *flags: str) -> subprocess.CompletedProcess:
     return run_main(["factorworld", "sync-docs", f"--root={tmp_path}", *flags], main)
 
 
+@pytest.mark.slow
 def test_the_sync_script_rewrites_fenced_tables_and_check_finds_stale_ones(tmp_path, run_main):
     page = _docs_tree(tmp_path)
     before = page.read_text()

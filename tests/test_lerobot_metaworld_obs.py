@@ -210,6 +210,7 @@ def test_round_trip_from_lerobots_own_metaworld_data(tmp_path):
     assert data["features"]["observation.image"]["shape"] == [480, 480, 3] and data["total_episodes"] == 1
 
 
+@pytest.mark.slow
 def test_the_docs_comparison_script_finds_lerobots_frames_and_states():
     """``scripts/compare_lerobot_metaworld.py`` (docs/lerobot_metaworld.md's table) at its smallest: button-press
     at seed 0 renders bit for bit at ``full`` and not at ``fast``, with the same states; an unknown task is refused."""

@@ -115,6 +115,7 @@ def test_every_phrasing_of_every_object_is_plain_words_naming_it():
             assert set(text.split()) & set(obj.family.nouns), text
 
 
+@pytest.mark.slow
 def test_instructions_name_exactly_one_object_of_the_scene_and_carry_no_factor_value_id_or_seed(make_env):
     suites = evaluation_suites(TASK, 4, list(supported_factors(TASK)), ["light", "table_pos", *CONDITIONS], 4, seed=5)
     forbidden = set(FACTORS) | {"train", "eval", "shift", "held", "out", "default"} | set(CONDITIONS)
@@ -180,6 +181,7 @@ def test_configurations_round_trip_through_json_and_give_the_same_episodes(tmp_p
 # --- held-out sets never reach training ----------------------------------------------------------------------
 
 
+@pytest.mark.slow
 def test_held_out_objects_and_phrasings_never_appear_in_training_environments(make_env):
     train_objects, train_templates = set(catalog.split_objects("train")), set(catalog.split_templates("train"))
     configs = sample_configs(TASK, 40, seed=1)
@@ -207,6 +209,7 @@ def test_held_out_objects_and_phrasings_never_appear_in_training_environments(ma
         assert phrased_env.reset(seed=s)[1]["pick"]["target"] == train_env.reset(seed=s)[1]["pick"]["target"]
 
 
+@pytest.mark.slow
 def test_episodes_are_paired_across_conditions_even_when_a_shift_pins_the_object_position(make_env):
     """Episode i names the same object in every condition, including an ``object_pos`` shift (which pins
     the arrangement offset instead of drawing it): conditions are compared episode by episode."""
@@ -250,6 +253,7 @@ def test_success_is_judged_on_the_named_object_and_lifting_another_fails(make_en
     assert held >= catalog.HOLD_STEPS and not info["is_success"], held
 
 
+@pytest.mark.slow
 def test_expert_succeeds_in_default_scenes_and_under_physical_shifts(make_env):
     """The cheap version of scripts/pick_expert_table.py (docs/pick.md has the full table)."""
     policy = expert_policy(TASK)

@@ -10,6 +10,7 @@ import threading
 
 import mujoco
 import numpy as np
+import pytest
 
 from lerobot_factorworld.protocol.sampling import sample_configs
 from lerobot_factorworld.scene.build import build_model
@@ -81,6 +82,7 @@ def test_one_context_per_thread_and_a_closed_renderer_refuses_to_draw():
         raise AssertionError("a closed renderer drew a frame")
 
 
+@pytest.mark.slow
 def test_an_env_left_open_at_exit_prints_nothing():
     """A script that never closes its env exits quietly: the renderer's ``__del__`` at interpreter exit does not
     try to free GL resources through bindings already torn down (it used to print an ignored TypeError)."""
@@ -95,6 +97,7 @@ def test_an_env_left_open_at_exit_prints_nothing():
     assert "Exception ignored" not in proc.stderr and "Traceback" not in proc.stderr, proc.stderr[-2000:]
 
 
+@pytest.mark.slow
 def test_an_env_left_open_releases_its_renderers_when_collected_and_at_exit():
     """Not only close(): a collected env frees its scenes' GL resources, and a script that never closes its env
     ends without GL tracebacks (its renderers are released at exit, while GL is still loaded)."""

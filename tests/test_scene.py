@@ -26,7 +26,12 @@ def shifted_value(task: str, name: str):
     return sample_factor(name, task, factor_rng(0, "eval", name), "eval")
 
 
-@pytest.mark.parametrize("task", list(TASKS))
+FAST_TASKS = ("pick-place", "door-open", "pick")  # a free object, an articulated fixture, a task family
+
+
+@pytest.mark.parametrize(
+    "task", [task if task in FAST_TASKS else pytest.param(task, marks=pytest.mark.slow) for task in TASKS]
+)
 def test_every_applicable_factor_changes_the_image(task, make_env):
     env = make_env(task, image_size=64, scene_cache_size=1)
     default, _ = env.reset(seed=0, options={"config": SceneConfig(task, PINNED)})

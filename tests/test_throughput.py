@@ -198,6 +198,7 @@ def test_keeping_freed_memory_is_set_once_and_inherited_by_forked_workers():
     assert proc.stdout.splitlines() == ["default False", "set True", "again True", "forked child True"], proc.stdout
 
 
+@pytest.mark.slow
 def test_bench_study_quick_runs_both_executions_with_identical_results():
     env = {**os.environ, "MUJOCO_GL": os.environ.get("MUJOCO_GL", "egl")}
     proc = subprocess.run(
