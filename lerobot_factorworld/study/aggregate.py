@@ -32,6 +32,7 @@ from .metrics import (
     percentile_interval,
     pooled_rates,
     rank_hardest_first,
+    rerank,
     seed_bootstrap,
     spearman,
     wilson_interval,
@@ -301,6 +302,27 @@ def factor_gap_bootstrap(rows: Sequence[dict], method: str, factors: Sequence[st
     return FactorGapBootstrap(names, point, reps)
 
 
+def task_orderings(
+    rows: Sequence[dict], method: str, factors: Sequence[str], tasks: Sequence[str]
+) -> dict[str, FactorGapBootstrap]:
+    """Per task of ``tasks`` with rows: the :class:`FactorGapBootstrap` of ``method`` over ``factors`` on that task's
+    rows alone (the "Ordering per task" table, ``ordering_per_task.png`` and report.html's per-task gaps)."""
+    present = {r["task"] for r in rows}
+    return {
+        t: factor_gap_bootstrap([r for r in rows if r["task"] == t], method, factors) for t in tasks if t in present
+    }
+
+
+def tasks_disagree(orderings: Mapping[str, FactorGapBootstrap]) -> bool:
+    """Whether two tasks rank the factors they share differently by their point estimates (1 = hardest)."""
+    ranked = [rank_hardest_first(dict(zip(b.names, b.point.tolist()))) for b in orderings.values()]
+    for a, b in itertools.combinations(ranked, 2):
+        shared = [f for f in a if f in b]
+        if rerank([a[f] for f in shared]) != rerank([b[f] for f in shared]):
+            return True
+    return False
+
+
 def factor_gap_intervals(rows: Sequence[dict], method: str, factors: Sequence[str]) -> dict[str, Interval]:
     """Per factor: mean gap of ``method`` (over tasks, N, seeds) with its 95% seed-bootstrap interval."""
     return factor_gap_bootstrap(rows, method, factors).intervals()
@@ -554,6 +576,15 @@ def pooled_success(rows: Sequence[dict], keys: Sequence[str]) -> dict[tuple, tup
         else:
             out[name] = (k, n, float(np.fmin(low, w_lo)), float(np.fmax(high, w_hi)))
     return out
+
+
+def per_task_success(rows: Sequence[dict], factors: Sequence[str]) -> dict[tuple, tuple[int, int, float, float]]:
+    """Success per (method, task, N, condition) of the main grid's ``train`` and single factors (``factors``),
+    pooled over seeds with :func:`pooled_success`'s interval: the "Success per task and N" table,
+    ``success_rates.png`` and report.html's success figure (one set of rows, so one set of intervals)."""
+    conditions = (TRAIN_SUITE, *factors)
+    shown = [r for r in main_grid(rows) if r["condition"] in conditions]
+    return pooled_success(shown, ["method", "task", "n_train_envs", "condition"])
 
 
 def pooled_rho_interval(rows: Sequence[dict], key: str, reference: Mapping[str, float]) -> tuple[float, float]:

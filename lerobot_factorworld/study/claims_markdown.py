@@ -54,7 +54,7 @@ def to_resolve(d: Decided) -> str:
     return "; ".join(parts)
 
 
-def _claim_cells(v: ClaimVerdict) -> tuple[str, str, str]:
+def claim_cells(v: ClaimVerdict) -> tuple[str, str, str]:
     """(estimate, interval, what would resolve it) of a claim: its comparison, or an ordering's count and the
     comparison that decides it (the one that disagrees, else the weakest)."""
     d = v.summary
@@ -77,6 +77,7 @@ def claims_section(verdicts: Sequence[ClaimVerdict]) -> list[str]:
     """The claims table (claim, source, estimate, interval, verdict) and every comparison behind it."""
     if not verdicts:
         return []
+    comparisons = comparison_rows(verdicts)
     lines = [
         CLAIMS_HEADING,
         "",
@@ -90,29 +91,45 @@ def claims_section(verdicts: Sequence[ClaimVerdict]) -> list[str]:
         "resolve it: the episodes per cell at these seeds (episode noise only, a lower bound) and the seeds at the "
         "observed spread between seeds (`study/claims.py`).",
         "",
-        "| claim | source | estimate | interval | verdict | to resolve |",
+        "| " + " | ".join(CLAIM_COLUMNS) + " |",
         "|---|---|---|---|---|---|",
     ]
+    for claim, source, estimate, interval, verdict, resolve in claim_rows(verdicts):
+        lines.append(f"| {claim} | {source} | {estimate} | {interval} | **{verdict}** | {resolve} |")
+    if comparisons:
+        lines += ["", "| " + " | ".join(COMPARISON_COLUMNS) + " |", "|---|---|---|---|---|---|"]
+        lines += ["| " + " | ".join(row) + " |" for row in comparisons]
+    lines.append("")
+    return lines
+
+
+CLAIM_COLUMNS = ("claim", "source", "estimate", "interval", "verdict", "to resolve")
+COMPARISON_COLUMNS = ("comparison", "estimate", "interval", "p", "verdict", "to resolve")
+
+
+def claim_rows(verdicts: Sequence[ClaimVerdict]) -> list[tuple[str, str, str, str, str, str]]:
+    """The claims table's cells (:data:`CLAIM_COLUMNS`), one row per claim, as report.md and report.html print
+    them."""
+    out = []
     for v in verdicts:
-        estimate, interval, resolve = _claim_cells(v)
+        estimate, interval, resolve = claim_cells(v)
         claim = v.claim.text + (f" ({v.claim.task})" if v.claim.task else "")
-        lines.append(f"| {claim} | {v.claim.source} | {estimate} | {interval} | **{v.verdict}** | {resolve} |")
+        out.append((claim, v.claim.source, estimate, interval, v.verdict, resolve))
+    return out
+
+
+def comparison_rows(verdicts: Sequence[ClaimVerdict]) -> list[tuple[str, str, str, str, str, str]]:
+    """Every comparison behind the claims, once (:data:`COMPARISON_COLUMNS`); none when each claim is one
+    comparison (the claims table shows them all)."""
+    if not any(len(v.comparisons) > 1 for v in verdicts):
+        return []
     seen: dict[str, Decided] = {}
     for v in verdicts:
         for d in v.comparisons:
             seen.setdefault(d.label + (f" ({v.claim.task})" if v.claim.task else ""), d)
-    if any(len(v.comparisons) > 1 for v in verdicts):
-        lines += [
-            "",
-            "| comparison | estimate | interval | p | verdict | to resolve |",
-            "|---|---|---|---|---|---|",
-        ]
-        for label, d in seen.items():
-            lines.append(
-                f"| {label} | {_num(d.point)} | {_interval(d)} | {d.p_value:.4f} | {d.verdict} | {to_resolve(d)} |"
-            )
-    lines.append("")
-    return lines
+    return [
+        (label, _num(d.point), _interval(d), f"{d.p_value:.4f}", d.verdict, to_resolve(d)) for label, d in seen.items()
+    ]
 
 
 def ordering_sentence(verdicts: Sequence[ClaimVerdict]) -> str:

@@ -22,18 +22,18 @@ from .aggregate import (
     gap_against_n,
     gap_per_factor_and_n,
     gap_per_radius,
-    main_grid,
     method_gap_differences,
     method_rho_differences,
     pair_bands,
     pair_rows,
     pair_summary,
-    pooled_success,
+    per_task_success,
     radius_rows,
     radius_slopes,
     stage_counts,
     success_per_condition_and_n,
     summary,
+    task_orderings,
 )
 from .claims import ClaimVerdict, decide, study_claims
 from .claims_markdown import claims_section, ordering_sentence
@@ -91,10 +91,12 @@ def render(
     command: str,
     planned: int,
     family_sections: Callable[[str], list[str]] = lambda part: [],
+    verdicts: Sequence[ClaimVerdict] | None = None,
 ) -> str:
     """The text of ``report.md`` from the rows of ``results.csv`` (``planned``: the plan's evaluations);
     ``family_sections(part)`` gives the task families' own sections (``part``: ``FAMILY_RESULTS`` after the
-    factor ordering, ``FAMILY_DETAILS`` at the end)."""
+    factor ordering, ``FAMILY_DETAILS`` at the end); ``verdicts``: the claims decided on ``rows``
+    (:func:`decide_claims`; computed here when not given)."""
     details = family_sections(FAMILY_DETAILS)
     ev = cfg.eval
     training = f"{cfg.train.epochs:g} epochs" if cfg.train.epochs else f"{cfg.train.steps} steps"
@@ -140,7 +142,7 @@ def render(
     unequal = [r for r in rows if r["episodes"] % r["n_envs"] or r["envs_visited"] != r["n_envs"]]
     if unequal:
         lines += [f"**Coverage:** {len(unequal)} row(s) did not visit their environments equally.", ""]
-    verdicts = decide(study_claims(cfg), cfg, rows)
+    verdicts = decide_claims(cfg, rows) if verdicts is None else list(verdicts)
     lines += _ordering_section(cfg, rows, verdicts)
     lines += claims_section(verdicts)
     lines += _ordering_per_task_section(cfg, rows)
@@ -161,6 +163,11 @@ def render(
     if missing:
         lines += [f"Not drawn (no data for them in this study): {', '.join(missing)}.", ""]
     return "\n".join(lines) + "\n" + "\n".join(details)
+
+
+def decide_claims(cfg: StudyConfig, rows: Sequence[dict]) -> list[ClaimVerdict]:
+    """The study's claims decided on ``rows`` (none without rows): what report.md and report.html both print."""
+    return decide(study_claims(cfg), cfg, rows) if rows else []
 
 
 def commit_line(rows: Sequence[dict]) -> str:
@@ -228,20 +235,13 @@ def _ordering_section(cfg: StudyConfig, rows: list[dict], verdicts: list[ClaimVe
     ours = rank_hardest_first({f: v[0] for f, v in gaps.items()})
     rho = spearman(ours, PAPER_FACTOR_RANKS)
     bootstrap = factor_gap_bootstrap(rows, method, cfg.factors)  # one resampling for every interval below
-    intervals = bootstrap.intervals()
     lines = [
         f"## Factor ordering ({method}, mean gap over tasks and N)",
         "",
-        "| factor | gap (mean ± SE over seeds) | 95% interval (bootstrap) | our rank | paper rank |",
+        "| " + " | ".join(ORDERING_COLUMNS) + " |",
         "|---|---|---|---|---|",
+        *("| " + " | ".join(row) + " |" for row in ordering_rows(gaps, bootstrap)),
     ]
-    for factor in sorted(gaps, key=lambda f: ours.get(f, 99)):
-        paper = PAPER_FACTOR_RANKS.get(factor)
-        interval = ci(*intervals[factor][1:]) if factor in intervals else "[n/a]"
-        lines.append(
-            f"| {factor} | {pm(*gaps[factor])} | {interval} | {ours.get(factor, 'n/a')} | "
-            f"{paper if paper is not None else '—'} |"
-        )
     shared = [f for f in ours if f in PAPER_FACTOR_RANKS]
     lines.append("")
     if math.isnan(rho):
@@ -282,6 +282,30 @@ def _ordering_section(cfg: StudyConfig, rows: list[dict], verdicts: list[ClaimVe
     return lines + _resolved_factors(bootstrap, method, sorted(gaps, key=lambda f: ours.get(f, 99)))
 
 
+ORDERING_COLUMNS = ("factor", "gap (mean ± SE over seeds)", "95% interval (bootstrap)", "our rank", "paper rank")
+
+
+def ordering_rows(gaps: dict[str, tuple[float, float]], bootstrap: FactorGapBootstrap) -> list[tuple[str, ...]]:
+    """The factor ordering table's cells (:data:`ORDERING_COLUMNS`), hardest first, as report.md and report.html
+    print them: ``gaps`` from ``aggregate.factor_ordering``, the intervals from the same rows' ``bootstrap``."""
+    ours = rank_hardest_first({f: v[0] for f, v in gaps.items()})
+    intervals = bootstrap.intervals()
+    out = []
+    for factor in sorted(gaps, key=lambda f: ours.get(f, 99)):
+        paper = PAPER_FACTOR_RANKS.get(factor)
+        interval = ci(*intervals[factor][1:]) if factor in intervals else "[n/a]"
+        out.append(
+            (
+                factor,
+                pm(*gaps[factor]),
+                interval,
+                str(ours.get(factor, "n/a")),
+                str(paper if paper is not None else "—"),
+            )
+        )
+    return out
+
+
 def _ordering_per_task_section(cfg: StudyConfig, rows: list[dict]) -> list[str]:
     """Each task's own ordering (the first method's mean gap per factor, its rank and Spearman's rho with the
     paper's), so a pooled ordering that one task makes is seen as such."""
@@ -289,9 +313,7 @@ def _ordering_per_task_section(cfg: StudyConfig, rows: list[dict]) -> list[str]:
     if len(tasks) < 2 or len(cfg.shifted_factors()) < 2:
         return []
     method = cfg.methods[0].name
-    per_task = {
-        t: factor_gap_bootstrap([r for r in rows if r["task"] == t], method, cfg.shifted_factors()) for t in tasks
-    }
+    per_task = task_orderings(rows, method, cfg.shifted_factors(), tasks)
     lines = [
         f"## Ordering per task ({method})",
         "",
@@ -597,8 +619,7 @@ def _success_table(cfg: StudyConfig, rows: list[dict]) -> list[str]:
 def _per_task_table(cfg: StudyConfig, rows: list[dict]) -> list[str]:
     """Success per task and N of the main grid's train and single-factor conditions, pooled over seeds."""
     conditions = [TRAIN_SUITE, *cfg.factors]
-    shown = [r for r in main_grid(rows) if r["condition"] in conditions]
-    pooled = pooled_success(shown, ["method", "task", "n_train_envs", "condition"])
+    pooled = per_task_success(rows, cfg.factors)
     if not pooled:
         return []
     seeds = len({r["seed"] for r in rows})
@@ -647,6 +668,21 @@ def _stages_section(cfg: StudyConfig, rows: list[dict]) -> list[str]:
     counts = stage_counts(rows)
     if not counts:
         return []
+    tables = stage_tables(cfg, counts)
+    lines = ["## Where episodes fail (share of episodes by the furthest stage reached)", "", STAGES_NOTE, ""]
+    for names, table_keys in tables.items():
+        lines += [
+            "| method | task | N | condition | episodes | " + " | ".join(names) + " |",
+            "|---|---|---|---|---|" + "---|" * len(names),
+        ]
+        lines += [_stage_row(key, counts[key], names) for key in table_keys]
+        lines.append("")
+    return lines
+
+
+def stage_tables(cfg: StudyConfig, counts: dict[tuple, dict[str, int]]) -> dict[tuple[str, ...], list[tuple]]:
+    """The rows of the "Where episodes fail" tables: per list of stage names (tasks of one kind share one), the
+    keys (method, task, N, condition) of ``aggregate.stage_counts`` in the report's order, ``train`` first."""
     order = [TRAIN_SUITE, *cfg.conditions()]
     conditions = [*order, *(c for c in dict.fromkeys(k[3] for k in counts) if c not in order)]
     keys = [
@@ -660,15 +696,7 @@ def _stages_section(cfg: StudyConfig, rows: list[dict]) -> list[str]:
     tables: dict[tuple[str, ...], list[tuple]] = defaultdict(list)  # stage names -> the keys of its rows
     for key in keys:
         tables[tuple(counts[key])].append(key)
-    lines = ["## Where episodes fail (share of episodes by the furthest stage reached)", "", STAGES_NOTE, ""]
-    for names, table_keys in tables.items():
-        lines += [
-            "| method | task | N | condition | episodes | " + " | ".join(names) + " |",
-            "|---|---|---|---|---|" + "---|" * len(names),
-        ]
-        lines += [_stage_row(key, counts[key], names) for key in table_keys]
-        lines.append("")
-    return lines
+    return dict(tables)
 
 
 def _stage_row(key: tuple, counts: dict[str, int], names: Sequence[str]) -> str:
