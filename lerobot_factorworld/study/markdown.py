@@ -48,7 +48,7 @@ from .paper import (
     PAPER_PAIR_TOLERANCE,
     PAPER_PAIRS_WITHIN,
 )
-from .plots import CAPTIONS, PLOTS
+from .plots import CAPTIONS, DRAWN_WHEN, PLOTS
 from .results import RESULTS_FILE, commit_name
 
 REPORT_FILE = "report.md"
@@ -161,7 +161,10 @@ def render(
         lines += [f"![{path.name}]({path.name})", "", CAPTIONS[path.name], ""]
     missing = [p for p in PLOTS if p not in {q.name for q in plots}]
     if missing:
-        lines += [f"Not drawn (no data for them in this study): {', '.join(missing)}.", ""]
+        no_data = [p for p in missing if p not in DRAWN_WHEN]
+        why = [f"{', '.join(no_data)} (no data for them in this study)"] if no_data else []
+        why += [f"{p} (drawn only with {DRAWN_WHEN[p]})" for p in missing if p in DRAWN_WHEN]
+        lines += [f"Not drawn: {'; '.join(why)}.", ""]
     return "\n".join(lines) + "\n" + "\n".join(details)
 
 
