@@ -26,7 +26,8 @@ from .config import RUN_CONFIG_FILE, StudyConfig, write_run_config
 from .episode_videos import collect_videos
 from .episodes import EPISODES_FILE, episode_rows, write_episodes
 from .family_report import FamilyReport, report_of
-from .markdown import REPORT_FILE, render
+from .html_report import write_html_report
+from .markdown import REPORT_FILE, decide_claims, render
 from .plan import Plan, make_plan
 from .plots import write_plots
 from .profile import profile_markdown
@@ -66,9 +67,11 @@ def rebuild_report(cfg: StudyConfig, command: str) -> tuple[Path, Path, list[Pat
 def render_report(
     cfg: StudyConfig, rows: list[dict], out_dir: Path, command: str, planned: int, tail: Sequence[str] = ()
 ) -> tuple[Path, list[Path]]:
-    """The one renderer: plots and ``report.md`` in ``out_dir`` from ``results.csv`` rows and the families'
-    files in ``out_dir`` (``tail``: lines after the report); the report's and the plots' paths."""
+    """The one renderer: plots, ``report.md`` and ``report.html`` (with its paired-episode viewer of
+    ``out_dir/episodes/``) in ``out_dir`` from ``results.csv`` rows and the families' files in ``out_dir``
+    (``tail``: lines after report.md); report.md's and the plots' paths."""
     plots = write_plots(rows, cfg, out_dir)
+    verdicts = decide_claims(cfg, rows)  # once, for both reports
     families = families_of(cfg)
 
     def family_sections(part: str) -> list[str]:
@@ -78,9 +81,10 @@ def render_report(
             for line in family.report_sections(cfg=cfg, rows=rows, study_dir=out_dir, part=part)
         ]
 
-    text = render(cfg, rows, plots, command, planned, family_sections)
+    text = render(cfg, rows, plots, command, planned, family_sections, verdicts)
     if tail:
         text = text.rstrip("\n") + "\n\n" + "\n".join(tail)
+    write_html_report(cfg, rows, out_dir, verdicts)
     return atomic_write_text(out_dir / REPORT_FILE, text), plots
 
 
