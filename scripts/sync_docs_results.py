@@ -1,4 +1,4 @@
-"""Regenerate every committed study report (``docs/results/<study>/``: report.md and plots from its
+"""Regenerate every committed study report (``docs/results/<study>/``: report.md, report.html and plots from its
 results.csv, config.yaml and family CSV files) and rewrite the tables of ``docs/*.md`` fenced from them
 (``<!-- results: STUDY "SECTION" -->`` ... ``<!-- /results -->``, see ``lerobot_factorworld/study/published.py``).
 
@@ -13,39 +13,21 @@ from __future__ import annotations
 
 import argparse
 import sys
-import tempfile
 from pathlib import Path
 
-from lerobot_factorworld.study.markdown import REPORT_FILE
-from lerobot_factorworld.study.published import (
-    RESULTS_ROOT,
-    check_docs,
-    committed_studies,
-    doc_files,
-    regenerate_studies,
-    sync_docs,
-)
+from lerobot_factorworld.study.published import RESULTS_ROOT, committed_studies, stale_published, sync_published
 
 ROOT = Path(__file__).resolve().parents[1]
 
 
 def check(root: Path) -> list[str]:
     """What is stale: committed reports that differ from their regeneration, and fenced blocks that differ."""
-    studies = committed_studies(root / RESULTS_ROOT)
-    with tempfile.TemporaryDirectory() as tmp:
-        reports = regenerate_studies(studies, Path(tmp))
-    problems = [
-        f"{folder / REPORT_FILE} is not what its results.csv regenerates"
-        for name, folder in studies.items()
-        if not (folder / REPORT_FILE).is_file() or (folder / REPORT_FILE).read_text() != reports[name]
-    ]
-    return problems + check_docs(doc_files(root / "docs"), reports)
+    return stale_published(root)
 
 
 def sync(root: Path) -> list[Path]:
     """Regenerate the committed reports in place, then rewrite the fenced blocks; the docs files changed."""
-    reports = regenerate_studies(committed_studies(root / RESULTS_ROOT))
-    return sync_docs(doc_files(root / "docs"), reports)
+    return sync_published(root)
 
 
 def main() -> None:

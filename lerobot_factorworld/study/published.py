@@ -1,8 +1,9 @@
 """Committed study results and the docs tables that quote them, kept equal by construction.
 
 A study whose numbers the docs quote is committed as ``docs/results/<study>/``: its ``results.csv``, the
-``config.yaml`` that made it, its task families' CSV files, and the ``report.md`` and plots that
-``factorworld report`` regenerates from them. A table in ``docs/*.md`` that comes from such a report is
+``config.yaml`` that made it, its task families' CSV files, and the ``report.md``, ``report.html`` and plots that
+``factorworld report`` regenerates from them (``plotly.min.js``, which report.html needs next to it, is a link to
+one shared copy: :func:`share_plotly_js`). A table in ``docs/*.md`` that comes from such a report is
 fenced by two markers naming the study folder, the report's section (the start of its ``## `` heading) and,
 when the section has more than one table, which one (1 = the first)::
 
@@ -19,6 +20,7 @@ when the section has more than one table, which one (1 = the first)::
 
 from __future__ import annotations
 
+import os
 import re
 import tempfile
 from collections.abc import Iterable, Mapping
@@ -26,6 +28,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from ..core.io import atomic_write_text
+from .html_report import HTML_FILE, PLOTLY_JS, write_plotly_js
 from .markdown import REPORT_FILE
 from .report import PUBLISHED_CONFIG, load_config, regenerate_report
 from .results import RESULTS_FILE
@@ -210,21 +213,44 @@ def sync_docs(docs: Iterable[Path], reports: Mapping[str, str]) -> list[Path]:
 
 
 def stale_published(root: Path) -> list[str]:
-    """What is stale in a checkout at ``root``: committed reports that differ from their regeneration, and fenced
-    docs blocks that differ from the reports (``factorworld sync-docs --check``)."""
+    """What is stale in a checkout at ``root``: committed reports (report.md, report.html) that differ from their
+    regeneration, a ``plotly.min.js`` that is not the installed Plotly's, and fenced docs blocks that differ from
+    the reports (``factorworld sync-docs --check``)."""
     studies = committed_studies(root / RESULTS_ROOT)
+    problems = []
     with tempfile.TemporaryDirectory() as tmp:
         reports = regenerate_studies(studies, Path(tmp))
-    problems = [
-        f"{folder / REPORT_FILE} is not what its results.csv regenerates"
-        for name, folder in studies.items()
-        if not (folder / REPORT_FILE).is_file() or (folder / REPORT_FILE).read_text() != reports[name]
-    ]
+        for name, folder in studies.items():
+            for file, made in ((REPORT_FILE, reports[name]), (HTML_FILE, _text(Path(tmp) / name / HTML_FILE))):
+                if _text(folder / file) != made:
+                    problems.append(f"{folder / file} is not what its results.csv regenerates")
+            if _text(folder / PLOTLY_JS) != _text(Path(tmp) / name / PLOTLY_JS):
+                problems.append(f"{folder / PLOTLY_JS} is missing or not the installed Plotly's")
     return problems + check_docs(doc_files(root / "docs"), reports)
 
 
+def _text(path: Path) -> str | None:
+    return path.read_text(encoding="utf-8") if path.is_file() else None
+
+
 def sync_published(root: Path) -> list[Path]:
-    """Regenerate the committed reports in place, then rewrite the fenced docs blocks; the docs files changed
-    (``factorworld sync-docs``)."""
-    reports = regenerate_studies(committed_studies(root / RESULTS_ROOT))
+    """Regenerate the committed reports in place (with one shared ``plotly.min.js``: :func:`share_plotly_js`),
+    then rewrite the fenced docs blocks; the docs files changed (``factorworld sync-docs``)."""
+    studies = committed_studies(root / RESULTS_ROOT)
+    share_plotly_js(root / RESULTS_ROOT, studies)
+    reports = regenerate_studies(studies)
     return sync_docs(doc_files(root / "docs"), reports)
+
+
+def share_plotly_js(results_root: Path, studies: Mapping[str, Path]) -> None:
+    """One ``plotly.min.js`` (4.8 MB) for every committed report.html: ``results_root/plotly.min.js``, the installed
+    Plotly's, and in each study folder a relative link to it, so that a checkout holds it once and each report
+    still opens from its folder (a regenerated report keeps a link whose target is current)."""
+    shared = write_plotly_js(results_root)
+    for folder in studies.values():
+        link = folder / PLOTLY_JS
+        target = os.path.relpath(shared, folder)
+        if link.is_symlink() and os.readlink(link) == target:
+            continue
+        link.unlink(missing_ok=True)
+        link.symlink_to(target)
