@@ -14,6 +14,7 @@ from pathlib import Path
 import pytest
 
 from lerobot_factorworld.cli import main
+from lerobot_factorworld.study.html_report import HTML_FILE
 from lerobot_factorworld.study.markdown import REPORT_FILE, commit_line
 from lerobot_factorworld.study.published import (
     RESULTS_ROOT,
@@ -87,6 +88,10 @@ def test_every_committed_report_and_fenced_docs_table_is_what_its_results_csv_re
         )
         for plot in (tmp_path / name).glob("*.png"):
             assert (folder / plot.name).is_file(), f"{folder / plot.name} missing: run scripts/sync_docs_results.py"
+        html = folder / HTML_FILE  # deterministic: byte for byte, like report.md
+        assert html.is_file() and html.read_bytes() == (tmp_path / name / HTML_FILE).read_bytes(), (
+            f"{html} is stale: run `python scripts/sync_docs_results.py`"
+        )
     problems = check_docs(doc_files(ROOT / "docs"), reports)
     assert not problems, "stale docs tables (run `python scripts/sync_docs_results.py`): " + "; ".join(problems)
 
