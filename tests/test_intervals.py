@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from lerobot_factorworld.study import aggregate, metrics, power
+from lerobot_factorworld.study.claims import decide, study_claims
 from lerobot_factorworld.study.config import EvalSettings, StudyConfig
 from lerobot_factorworld.study.markdown import (
     _gap_against_n_section,
@@ -314,7 +315,8 @@ def test_gap_against_n_matches_the_gap_table_and_resolves_a_gap_that_closes():
 def test_the_report_prints_intervals_for_rho_pairs_slopes_and_pooled_tables():
     cfg = config(methods=[{"name": "bc", "policy": {"type": "bc"}}])
     rows = study_rows()
-    ordering = "\n".join(_ordering_section(cfg, rows))
+    verdicts = decide(study_claims(cfg), cfg, rows)
+    ordering = "\n".join(_ordering_section(cfg, rows, verdicts))
     assert "95% interval (bootstrap)" in ordering
     assert "Spearman correlation with the paper's ordering over 7 factors: **" in ordering
     assert "95% interval [+" in ordering or "95% interval [-" in ordering
@@ -329,7 +331,8 @@ def test_the_report_prints_intervals_for_rho_pairs_slopes_and_pooled_tables():
     assert "slope per 0.025 m [95% interval]" in "\n".join(_radius_section(cfg, rows))
     table = "\n".join(_per_task_table(cfg, rows))
     assert "pooled over the 3 seed(s)" in table and "| bc | door-open | 5 | " in table
-    assert _ordering_section(cfg, rows) == _ordering_section(cfg, rows)  # deterministic
+    assert _ordering_section(cfg, rows, verdicts) == _ordering_section(cfg, rows, verdicts)  # deterministic
+    assert "Against the paper's ordering (decided in *The paper's claims* below)" in ordering
     assert _pairs_section(cfg, rows) == _pairs_section(cfg, rows)
 
 

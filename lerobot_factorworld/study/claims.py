@@ -96,12 +96,14 @@ class ClaimVerdict:
 
     @property
     def summary(self) -> Decided | None:
-        """The comparison the table shows: the one that disagrees, else the weakest link (the smallest
-        effect the paper's way)."""
+        """The comparison the table shows: one that gives the claim its verdict, the weakest of them (the smallest
+        effect the paper's way; the first that disagrees, for a claim that disagrees)."""
         if not self.comparisons:
             return None
-        against = [c for c in self.comparisons if c.verdict == DISAGREES]
-        return against[0] if against else min(self.comparisons, key=lambda c: c.sign * (c.point - c.threshold))
+        deciding = [c for c in self.comparisons if c.verdict == self.verdict] or self.comparisons
+        if self.verdict == DISAGREES:
+            return deciding[0]
+        return min(deciding, key=lambda c: c.sign * (c.point - c.threshold))
 
 
 # --- statistics on a (seed x cell) table ---------------------------------------------------------------------

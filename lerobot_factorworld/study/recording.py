@@ -21,6 +21,7 @@ VIDEOS_DIR = "episodes"  # in a step's folder, and next to a study's report
 RECORDED_KEY = "recorded"  # an eval step's result: the episodes it recorded (absent when none was)
 RECORD_SETTING = "record_episodes"  # how an eval step runs (never in its key): episodes to record per condition
 CODEC = "libvpx-vp9"  # WebM: every browser plays it, Chromium's open builds included
+PLAYBACK_FPS = 20  # a quarter of Meta-World's 80 Hz control: a 200-step episode plays in 10 s, slow enough to follow
 
 
 @dataclass
@@ -78,7 +79,9 @@ def write_webm(frames: Sequence[np.ndarray], path: Path, fps: int) -> Path:
     return path
 
 
-def write_recorded(recorder: EpisodeRecorder, seeds: Sequence[int], folder: Path, fps: int) -> list[dict[str, Any]]:
+def write_recorded(
+    recorder: EpisodeRecorder, seeds: Sequence[int], folder: Path, fps: int = PLAYBACK_FPS
+) -> list[dict[str, Any]]:
     """The recorded episodes' videos in ``folder / VIDEOS_DIR``, and what the step's result says of them."""
     out = []
     for index, seed in enumerate(seeds):

@@ -23,7 +23,7 @@ from ..core.io import atomic_write_text
 from ..core.settings import parse_config
 from ..families import family_of
 from .config import RUN_CONFIG_FILE, StudyConfig, write_run_config
-from .episode_videos import collect_videos
+from .episode_videos import MANIFEST, collect_videos
 from .episodes import EPISODES_FILE, episode_rows, write_episodes
 from .family_report import FamilyReport, report_of
 from .html_report import write_html_report
@@ -31,6 +31,7 @@ from .markdown import REPORT_FILE, decide_claims, render
 from .plan import Plan, make_plan
 from .plots import write_plots
 from .profile import profile_markdown
+from .recording import VIDEOS_DIR
 from .results import RESULTS_FILE, finished_evaluations, read_results, result_rows, write_results
 from .steps import STEPS_DIR
 
@@ -117,6 +118,9 @@ def regenerate_report(
     _copy(results, out / RESULTS_FILE)
     if (results.parent / EPISODES_FILE).is_file():  # not read by the report, but part of the results
         _copy(results.parent / EPISODES_FILE, out / EPISODES_FILE)
+    videos = results.parent / VIDEOS_DIR
+    if (videos / MANIFEST).is_file() and videos.resolve() != (out / VIDEOS_DIR).resolve():  # report.html's viewer
+        shutil.copytree(videos, out / VIDEOS_DIR, dirs_exist_ok=True)
     if not (out / RUN_CONFIG_FILE).is_file() or config.resolve() != (out / RUN_CONFIG_FILE).resolve():
         _publish_config(config, out / PUBLISHED_CONFIG)
     for family in families_of(cfg):

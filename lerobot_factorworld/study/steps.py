@@ -629,8 +629,7 @@ def _run_eval(step: Step, folder: Path, deps: list[Path]) -> dict[str, Any]:
             "policy_type": policy_cfg.type,  # a given checkpoint's type is known from it only
         }
         if recorder.frames:  # the recorded episodes' frames as videos (not results: they change no number)
-            fps = next(_factorworld_envs(envs)).metadata["render_fps"]
-            result[RECORDED_KEY] = write_recorded(recorder, seeds, folder, fps)
+            result[RECORDED_KEY] = write_recorded(recorder, seeds, folder)
         family = family_of(task)
         if family.content_key:  # what every episode asked for (e.g. instruction, named object), for breakdowns
             result[family.content_key] = family.episode_records(configs, seeds, width)
