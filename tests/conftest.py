@@ -304,15 +304,12 @@ EXPECTED_SECONDS = {
     "tests/test_datasets.py::test_lerobot_train_runs_on_the_collected_dataset": 16.0,  # its dataset fixture: 12
     "tests/test_datasets.py::test_killed_collection_resumes_without_duplicates": 24.0,
     "tests/test_rerun.py::test_the_cpu_fingerprint_hashes_each_layer_and_a_oneDNN_cap_leaves_pixels_and_physics_alone": 23.0,
-    "tests/test_study.py::test_cli_dry_run_and_one_line_errors": 22.0,
     "tests/test_pick.py::test_held_out_objects_and_phrasings_never_appear_in_training_environments": 21.0,
     "tests/test_experts.py::test_expert_solves_default_and_each_physical_shift[bin-picking]": 20.0,
     "tests/test_experts.py::test_expert_solves_default_and_each_physical_shift[pick-place]": 19.0,
     "tests/test_pick.py::test_rt1_trains_across_instructions_and_lerobot_eval_reports_every_condition": 16.0,
-    "tests/test_docs_results.py::test_every_committed_report_and_fenced_docs_table_is_what_its_results_csv_regenerates": 16.0,
     "tests/test_profile.py::test_profile_of_a_lerobot_metaworld_checkpoint": 16.0,
     "tests/test_rt1.py::test_lerobot_train_lowers_the_loss_and_lerobot_eval_runs_the_checkpoint": 15.0,
-    "tests/test_bench_scripts.py::test_bench_script_prints_consistent_rows_and_the_ratio_last[malloc]": 14.0,
     "tests/test_compat.py::test_dataset_sidecars_are_byte_identical[sidecar_door-open.json]": 15.0,
     "tests/test_compat.py::test_dataset_sidecars_are_byte_identical[sidecar_pick.json]": 15.0,
     "tests/test_profile.py::test_profile_writes_a_studys_outputs_without_collecting_or_training": 13.0,
@@ -323,6 +320,18 @@ EXPECTED_SECONDS = {
     "tests/test_pick.py::test_episodes_are_paired_across_conditions_even_when_a_shift_pins_the_object_position": 10.0,
     "tests/test_bench_scripts.py::test_bench_script_prints_consistent_rows_and_the_ratio_last[env]": 9.0,
     "tests/test_datasets.py::test_offline_push_fails_clearly_and_loses_nothing": 9.0,
+    # Marked slow by issue 43 (or their workload changed), measured 2026-11-27 with `-n 0` on 2 cores shared with a
+    # running study: rough, and longer than the idle numbers above by up to about 1.5x.
+    "tests/test_docs_results.py::test_every_committed_report_and_fenced_docs_table_is_what_its_results_csv_regenerates": 44.0,
+    "tests/test_bench_scripts.py::test_bench_script_prints_consistent_rows_and_the_ratio_last[policy]": 43.0,
+    "tests/test_bench_scripts.py::test_bench_script_prints_consistent_rows_and_the_ratio_last[malloc]": 26.0,
+    "tests/test_renderer.py::test_an_env_left_open_at_exit_prints_nothing": 22.0,
+    "tests/test_compare_gaps.py::test_the_script_prints_the_differences_findings_quotes_and_refuses_in_one_line": 22.0,
+    "tests/test_bc.py::test_checkpoint_reloads_after_its_weights_file_is_deleted[clip_rn50]": 19.0,
+    "tests/test_docs_results.py::test_the_sync_script_rewrites_fenced_tables_and_check_finds_stale_ones": 16.0,
+    "tests/test_bc.py::test_feature_cache_gives_the_same_loss_and_is_dropped_on_load": 16.0,
+    "tests/test_bc.py::test_clip_loading_is_strict_and_lists_the_bad_keys": 15.0,
+    "tests/test_datasets.py::test_full_disk_keeps_finished_shards_and_a_rerun_completes": 11.0,
 }
 SLOW_DEFAULT = 10.0
 
