@@ -14,7 +14,7 @@ This script hashes each one in fresh processes under the instruction-set caps a 
 
 Run it on two machines: equal hashes in the ``default`` row mean their steps are byte-identical; where the
 weights differ, the machines train different checkpoints from the same data, and a rerun lands within the
-committed intervals rather than on the committed numbers (``scripts/compare_reruns.py``).
+committed intervals rather than on the committed numbers (``factorworld compare-reruns``).
 
     MUJOCO_GL=egl .venv/bin/python scripts/check_cpu_determinism.py           # about 40 s on 2 cores
     MUJOCO_GL=egl .venv/bin/python scripts/check_cpu_determinism.py --quick   # the machine and oneDNN SSE4.1 only

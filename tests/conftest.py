@@ -326,7 +326,7 @@ EXPECTED_SECONDS = {
     "tests/test_bench_scripts.py::test_bench_script_prints_consistent_rows_and_the_ratio_last[policy]": 43.0,
     "tests/test_bench_scripts.py::test_bench_script_prints_consistent_rows_and_the_ratio_last[malloc]": 26.0,
     "tests/test_renderer.py::test_an_env_left_open_at_exit_prints_nothing": 22.0,
-    "tests/test_compare_gaps.py::test_the_script_prints_the_differences_findings_quotes_and_refuses_in_one_line": 22.0,
+    "tests/test_compare_gaps.py::test_the_command_prints_the_differences_findings_quotes_and_refuses_in_one_line": 22.0,
     "tests/test_bc.py::test_checkpoint_reloads_after_its_weights_file_is_deleted[clip_rn50]": 19.0,
     "tests/test_docs_results.py::test_the_sync_script_rewrites_fenced_tables_and_check_finds_stale_ones": 16.0,
     "tests/test_bc.py::test_feature_cache_gives_the_same_loss_and_is_dropped_on_load": 16.0,

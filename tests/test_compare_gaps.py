@@ -1,6 +1,6 @@
-"""One factor's gap across two studies (``study/compare.py``, ``scripts/compare_gaps.py``): the point estimates are
+"""One factor's gap across two studies (``study/compare.py``, ``factorworld compare-gaps``): the point estimates are
 the studies' own seed means, the difference's interval behaves (0 for a study against itself, away from 0 for a
-large effect), bad input is refused naming the valid choices, and the script prints what docs/findings.md quotes."""
+large effect), bad input is refused naming the valid choices, and the command prints what docs/findings.md quotes."""
 
 import subprocess
 import sys
@@ -66,22 +66,24 @@ QUOTED = [
     ("f7_object_texture_168px", "f1_ordering", ["--factor=object_texture"], "+0.092 [-0.067, +0.250]"),
     ("f7_object_texture_colours", "f7_object_texture_images", ["--factor=object_texture"], "+0.075 [-0.200, +0.325]"),
     ("f8_out_of_domain_language", "f8_out_of_domain", ["--factor=floor_texture", "--method=bc_lang",
-     "--second-method=bc"], "+0.175 [-0.101, +0.450]"),
+     "--second_method=bc"], "+0.175 [-0.101, +0.450]"),
 ]  # fmt: skip
 
 
 @pytest.mark.slow
-def test_the_script_prints_the_differences_findings_quotes_and_refuses_in_one_line():
-    script = [sys.executable, str(ROOT / "scripts" / "compare_gaps.py")]
+def test_the_command_prints_the_differences_findings_quotes_and_refuses_in_one_line():
+    command = [str(Path(sys.executable).with_name("factorworld")), "compare-gaps"]
     findings = " ".join((ROOT / "docs" / "findings.md").read_text().split())  # line breaks as spaces
     for a, b, flags, printed in QUOTED:
-        command = [*script, str(RESULTS / a), str(RESULTS / b), "--task=pick-place", *flags]
-        proc = subprocess.run(command, capture_output=True, text=True, timeout=120)
+        folders = [f"--first={RESULTS / a}", f"--second={RESULTS / b}"]
+        proc = subprocess.run(
+            [*command, *folders, "--task=pick-place", *flags], capture_output=True, text=True, timeout=120
+        )
         assert proc.returncode == 0, proc.stderr
         assert proc.stdout.strip().splitlines()[-1] == f"difference (first minus second): {printed}"
-        assert printed in findings and f"docs/results/{a} docs/results/{b}" in findings, a
-    folders = [str(RESULTS / "f7_object_texture_168px"), str(RESULTS / "f1_ordering")]
-    bad = subprocess.run([*script, *folders, "--factor=gravity", "--task=pick-place"], capture_output=True,
+        assert printed in findings and f"--first=docs/results/{a} --second=docs/results/{b}" in findings, a
+    folders = [f"--first={RESULTS / 'f7_object_texture_168px'}", f"--second={RESULTS / 'f1_ordering'}"]
+    bad = subprocess.run([*command, *folders, "--factor=gravity", "--task=pick-place"], capture_output=True,
                          text=True, timeout=120)  # fmt: skip
     assert (
         bad.returncode == 2

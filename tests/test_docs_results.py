@@ -79,16 +79,16 @@ def test_every_committed_report_and_fenced_docs_table_is_what_its_results_csv_re
     for name, folder in studies.items():
         committed = folder / REPORT_FILE
         assert committed.is_file() and committed.read_text() == reports[name], (
-            f"{committed} is stale: run `python scripts/sync_docs_results.py`"
+            f"{committed} is stale: run `factorworld sync-docs`"
         )
         for plot in (tmp_path / name).glob("*.png"):
-            assert (folder / plot.name).is_file(), f"{folder / plot.name} missing: run scripts/sync_docs_results.py"
+            assert (folder / plot.name).is_file(), f"{folder / plot.name} missing: run factorworld sync-docs"
         html = folder / HTML_FILE  # deterministic: byte for byte, like report.md
         assert html.is_file() and html.read_bytes() == (tmp_path / name / HTML_FILE).read_bytes(), (
-            f"{html} is stale: run `python scripts/sync_docs_results.py`"
+            f"{html} is stale: run `factorworld sync-docs`"
         )
     problems = check_docs(doc_files(ROOT / "docs"), reports)
-    assert not problems, "stale docs tables (run `python scripts/sync_docs_results.py`): " + "; ".join(problems)
+    assert not problems, "stale docs tables (run `factorworld sync-docs`): " + "; ".join(problems)
 
 
 def test_every_findings_row_names_its_configs_and_committed_results():

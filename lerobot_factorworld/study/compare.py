@@ -7,7 +7,7 @@ one method on one task at one N (main grid), over the training seeds both studie
 two methods of one table and go through the report's own :func:`aggregate.method_gap_differences`: a seed's
 cells move together in the bootstrap, and the two studies' cells of the same seed number are drawn together.
 Only counts are used (as in the report), so paired episodes are resampled independently, which widens the
-intervals. Pure functions of ``results.csv`` rows; ``scripts/compare_gaps.py`` reads the files and prints.
+intervals. Pure functions of ``results.csv`` rows; ``factorworld compare-gaps`` reads the files and prints :func:`comparison_lines`.
 """
 
 from __future__ import annotations

@@ -99,7 +99,7 @@ def write_html_report(
 
 def write_plotly_js(folder: Path) -> Path:
     """``plotly.min.js`` of the installed Plotly in ``folder``, written only when the folder has no identical copy
-    (a link to one counts: ``scripts/sync_docs_results.py`` links the committed reports to one shared copy)."""
+    (a link to one counts: ``factorworld sync-docs`` links the committed reports to one shared copy)."""
     from plotly.offline import get_plotlyjs  # noqa: PLC0415 - a 4.8 MB string, read only to write a report
 
     path = folder / PLOTLY_JS

@@ -14,7 +14,7 @@ when the section has more than one table, which one (1 = the first)::
 
     <!-- /results -->
 
-:func:`sync_docs` rewrites every fenced block from the reports (``scripts/sync_docs_results.py``) and
+:func:`sync_docs` rewrites every fenced block from the reports (``factorworld sync-docs``) and
 :func:`check_docs` lists the blocks that differ from them, byte for byte (``tests/test_docs_results.py``).
 """
 

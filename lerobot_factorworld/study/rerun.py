@@ -8,7 +8,7 @@ can end differently. What a rerun on another machine must do is land within the 
 module matches the two runs' rows by step key and says, per cell, whether the rerun's success rate lies
 within the first run's Wilson 95% interval and its gap within the first run's paired (Newcombe) interval;
 with both runs' ``episodes.parquet`` rows it also counts the episodes whose outcome and length agree.
-Pure functions of the rows: ``scripts/compare_reruns.py`` reads the files and prints.
+Pure functions of the rows: ``factorworld compare-reruns`` reads the files and prints :func:`rerun_lines`.
 """
 
 from __future__ import annotations
