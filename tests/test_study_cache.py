@@ -70,14 +70,14 @@ def test_collect_key_holds_the_data_version_and_package_versions_not_the_factor_
         assert not _keys(cfg, kind) & keys, kind
 
 
-def test_eval_key_ignores_threads_holds_a_batch_above_one_and_train_ignores_n_test_envs():
+def test_eval_key_ignores_threads_and_recorded_episodes_holds_a_batch_above_one_and_train_ignores_n_test_envs():
     cfg = _cfg()
     keys = _eval_keys(cfg)
     assert all("batch_size" not in s.inputs for s in make_plan(cfg).of_kind("eval"))  # one at a time: keys as before
-    threads = replace(cfg, eval=replace(cfg.eval, threads=2))
-    assert _eval_keys(threads) == keys
+    threads = replace(cfg, eval=replace(cfg.eval, threads=2, record_episodes=0))
+    assert _eval_keys(threads) == keys  # how an evaluation runs and what it records for viewing change no key
     step = next(s for s in make_plan(threads).of_kind("eval"))
-    assert step.run == {"threads": 2} and "threads" not in step.label
+    assert step.run == {"threads": 2, "record_episodes": 0} and "threads" not in step.label
     batched = replace(cfg, eval=replace(cfg.eval, batch_size=2))
     assert not set(_eval_keys(batched).values()) & set(keys.values())  # a batch changes the actions' last bits
     assert {s.inputs["batch_size"] for s in make_plan(batched).of_kind("eval")} == {2}
