@@ -1,0 +1,116 @@
+"""The power of a plan (study/power.py) where mutation testing found the suite silent (docs/testing.md): a cell's
+resolvable gap against an oracle on explicit paired episodes (other sizes, other z, the edges of both searches),
+the z of the pair metric, a sweep of one radius, and ``--dry-run``'s power lines word for word."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+
+from lerobot_factorworld.study import metrics, power
+from lerobot_factorworld.study.config import EvalSettings, StudyConfig
+
+
+def _by_episodes(n: int, p_train: float, z: float = metrics.Z95) -> float:
+    """The smallest share of train-only successes (no episode succeeds only when shifted) whose Newcombe interval,
+    computed from explicit paired episode outcomes, excludes 0."""
+    k = round(p_train * n)
+    train = [True] * k + [False] * (n - k)
+    for b in range(k + 1):
+        if metrics.paired_gap(train, [True] * (k - b) + [False] * (n - k + b), z)[1] > 0:
+            return b / n
+    return math.nan
+
+
+@pytest.mark.parametrize(("n", "p_train"), [(3, 1.0), (10, 0.5), (20, 0.8), (20, 0.95), (50, 0.3), (64, 0.75)])
+def test_a_cells_resolvable_gap_is_the_first_whole_episode_count_that_resolves(n, p_train):
+    expected = _by_episodes(n, p_train)
+    assert not math.isnan(expected) and power.cell_resolvable_gap(n, p_train) == expected
+    if (n, p_train) == (3, 1.0):
+        assert expected == 1.0  # all three train successes lost: only the search's last count resolves
+
+
+def test_a_cells_resolvable_gap_uses_the_z_it_is_given():
+    # at z = 1 (a 68% interval) 2 train-only successes of 20 resolve; at 95%, 5 (test_intervals.py)
+    assert power.cell_resolvable_gap(20, 0.8, z=1.0) == _by_episodes(20, 0.8, z=1.0) == 0.1
+    assert power.cell_resolvable_gap(20, 0.8) == 0.25
+
+
+@pytest.mark.parametrize(("n", "p_train"), [(6, 0.5), (20, 0.8), (100, 0.5)])
+def test_independent_outcomes_resolve_where_the_expected_tables_interval_first_excludes_0(n, p_train):
+    d = power.cell_resolvable_gap(n, p_train, paired=False)
+    step = p_train / power.GRID
+
+    def lower(gap: float) -> float:  # Newcombe's lower bound on the expected table at P_F = P_T - gap
+        p_f = p_train - gap
+        q_t, q_f = 1 - p_train, 1 - p_f
+        return metrics.newcombe_paired(n * p_train * p_f, n * p_train * q_f, n * q_t * p_f, n * q_t * q_f)[1]
+
+    assert lower(d) > 0 and lower(d - step) <= 0
+    if (n, p_train) == (6, 0.5):
+        assert d == 0.5  # only P_F = 0 resolves: the search's last point
+
+
+def test_independent_outcomes_use_the_z_they_are_given():
+    d = power.cell_resolvable_gap(20, 0.8, paired=False, z=1.0)
+    lower = [
+        metrics.newcombe_paired(16 * q, 16 * (1 - q), 4 * q, 4 * (1 - q), 1.0)[1] for q in (0.8 - d, 0.8 - d + 0.0004)
+    ]
+    assert lower[0] > 0 >= lower[1] and d < power.cell_resolvable_gap(20, 0.8, paired=False)
+
+
+@pytest.mark.parametrize(("pairs", "p_train"), [(48, 0.8), (100, 0.2), (240, 0.95), (48, 1.0), (4, 0.49)])
+def test_a_mean_gap_resolves_where_the_normal_interval_first_excludes_it(pairs, p_train):
+    d = power.mean_resolvable_gap(pairs, p_train)
+    step = p_train / power.GRID
+
+    def half_width(gap: float) -> float:  # independent outcomes at P_F = P_T - gap
+        p_f = p_train - gap
+        return metrics.Z95 * math.sqrt((p_train * (1 - p_train) + p_f * (1 - p_f)) / pairs)
+
+    assert 0 < d <= p_train and half_width(d) <= d and half_width(d - step) > d - step
+    if (pairs, p_train) == (4, 0.49):
+        assert d == 0.49  # only P_F = 0 resolves: the search's last point
+
+
+def test_a_mean_gap_search_spans_its_grid_and_stops_at_p_train():
+    assert power.mean_resolvable_gap(10**8, 0.5) == 0.5 / power.GRID  # a huge design: the grid's first step
+    assert math.isnan(power.mean_resolvable_gap(6, 0.39))  # even P_F = 0 is not resolved: no gap beyond P_T
+
+
+def test_the_pair_metric_and_the_slope_use_their_z_and_refuse_one_radius():
+    assert power.pair_metric_resolvable(100, 0.5, z=1.0) == pytest.approx(math.sqrt(2 * 0.25 / 100) / 0.5)
+    assert power.slope_resolvable(100, [0.025, 0.075], 0.5, z=1.0) == pytest.approx(math.sqrt(0.5 / 100 / 0.00125))
+    assert math.isnan(power.slope_resolvable(100, [0.05, 0.05], 0.5))  # one radius: no slope
+
+
+def test_dry_run_power_lines_word_for_word():
+    cfg = StudyConfig(
+        tasks=["door-open", "pick-place"],
+        factors=["camera_pos", "light"],
+        pairs=["camera_pos+light"],
+        seeds=[0, 1, 2],
+        n_train_envs=[1, 2],
+        eval=EvalSettings(n_test_envs=2, episodes=4),
+        radius_factors=["camera_pos"],
+        radius_widths=["narrow", "wide"],
+    )
+    # 4 episodes per cell: no count of 1 (P = 0.25) or 2 (P = 0.5) train successes resolves; 2 tasks x 2 N x
+    # 3 seeds = 12 cells of 4 episodes: two factors apart at P = 0.5, 1.96 sqrt(2 x 0.25 / 48) = 0.200, the
+    # pair metric that / 0.5; the slope over 0.025 and 0.075 m (Sxx = 0.00125) per 0.025 m:
+    # 1.96 sqrt(0.5 / 48 / 0.00125) x 0.025 = 0.141
+    assert power.power_lines(cfg, planned=(0.25, 0.5, 0.9)) == [
+        "  power: smallest effect whose 95% interval excludes 0, at planned P_T (pairs: P_min) below (4 paired "
+        "episodes per cell, 3 seed(s); episode noise only, so lower bounds; summaries assume independent outcomes; "
+        "methods in study/power.py):",
+        "                                                                P=0.25   P=0.5    P=0.9  ",
+        "    gap, one cell (Newcombe; no reversals)                         n/a     n/a   0.750",
+        "    gap, one cell (Newcombe; independent outcomes)                 n/a     n/a   0.662",
+        "    factor's mean gap, 12 cell(s)                                0.149   0.193   0.149",
+        "    factor's gap at one N, 6 cell(s)                             0.196   0.263   0.222",
+        "    two factors' mean gaps apart (ordering), 12 cell(s)          0.173   0.200   0.120",
+        "    pair metric |.|, 12 cell(s), at P_min = P (paper: ±0.06)     0.693   0.400   0.133",
+        "    radius slope, gap per 0.025 m over 2 radii                   0.122   0.141   0.085",
+    ]
+    assert power.cell_resolvable_gap(4, 0.9) == _by_episodes(4, 0.9) == 0.75
