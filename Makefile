@@ -47,8 +47,9 @@ bench: setup
 
 # Mutation testing of the modules that compute what the project reports (slow, 1-2 hours on 2 cores; not part of
 # `make test`): mutmut ([tool.mutmut] in pyproject.toml) in mutants/, then the score per module with the
-# equivalent mutants of docs/testing.md left out. Reruns only what changed; `$(BIN)/mutmut show <name>` shows one.
+# equivalent mutants of docs/testing.md left out (PYTHONPATH: a test's subprocess imports the mutated copy too).
+# Reruns only what changed; `$(BIN)/mutmut show <name>` shows a mutant.
 mutation: setup
 	mkdir -p mutants
-	$(BIN)/mutmut run --max-children 2 > mutants/run.log 2>&1 || (tail -n 40 mutants/run.log; exit 1)
+	PYTHONPATH=$(CURDIR)/mutants $(BIN)/mutmut run --max-children 2 > mutants/run.log 2>&1 || (tail -n 40 mutants/run.log; exit 1)
 	$(BIN)/mutmut results --all true | $(BIN)/python scripts/mutation_scores.py
