@@ -39,7 +39,7 @@ from .factors.registry import FACTORS, PAPER_STUDY_FACTORS, check_factors, suppo
 from .factors.values import save_configs
 from .protocol.sampling import SamplingOptions, sample_configs
 from .scene.cameras import CAMERAS
-from .study.named import resolve_study_config, study_names
+from .study.plan.named import resolve_study_config, study_names
 from .tasks import TASKS, check_tasks
 
 if TYPE_CHECKING:  # the study stack imports LeRobot: only where a command needs it
@@ -154,7 +154,7 @@ STUDY_FLAG_ALIASES = {
 
 def cmd_study(args: list[str]) -> None:
     # LeRobot and torch (~4 s): `factorworld tasks` and friends stay instant
-    from .study.config import StudyConfig  # noqa: PLC0415
+    from .study.plan.config import StudyConfig  # noqa: PLC0415
     from .study.runner import inspect_study, run_study  # noqa: PLC0415
 
     command = "factorworld study " + " ".join(args)
@@ -167,7 +167,7 @@ def cmd_study(args: list[str]) -> None:
 
 def cmd_profile(args: list[str]) -> None:
     # LeRobot's env config (~4 s): only when this command runs
-    from .study.policy_profile import ProfileConfig  # noqa: PLC0415
+    from .study.plan.policy_profile import ProfileConfig  # noqa: PLC0415
     from .study.runner import inspect_study, run_study  # noqa: PLC0415
 
     command = "factorworld profile " + " ".join(args)
@@ -233,9 +233,9 @@ def cmd_configs(args: list[str]) -> None:
     """The packaged study configs by name, each with its ``--dry-run`` estimate on this machine's kind (2 cores)."""
     no_settings("configs", args)
     # the study's config checks its policies with LeRobot (~4 s): only when this command runs
-    from .study.config import StudyConfig  # noqa: PLC0415
-    from .study.cost import estimate  # noqa: PLC0415
-    from .study.plan import make_plan  # noqa: PLC0415
+    from .study.plan.config import StudyConfig  # noqa: PLC0415
+    from .study.plan.cost import estimate  # noqa: PLC0415
+    from .study.plan.grid import make_plan  # noqa: PLC0415
 
     print(f"{'name':40s} {'steps':>6s} {'2 cores':>8s} {'1 GPU':>7s}  (--dry-run's estimates, from nothing cached)")
     for name in study_names():
@@ -273,7 +273,7 @@ class ReportConfig:
 
 def cmd_report(args: list[str]) -> None:
     # the study's config checks its policies with LeRobot (~4 s): only when this command runs
-    from .study.report import regenerate_report  # noqa: PLC0415
+    from .study.report.write import regenerate_report  # noqa: PLC0415
 
     cfg = parse_config(ReportConfig, _report_args(args), "report")
     report, plots = regenerate_report(cfg.results, cfg.config or None, cfg.out or None)
@@ -298,7 +298,7 @@ def _report_args(args: list[str]) -> list[str]:
 class CompareGapsConfig:
     """``factorworld compare-gaps``: one factor's gap in two studies (each one method on one task, at one N) and
     their difference, each with its seed-level bootstrap 95% interval, over the training seeds both hold
-    (``study/compare.py``).
+    (``study/results/compare.py``).
 
     Attributes:
         first: A study folder (or its ``results.csv``).
@@ -327,7 +327,7 @@ class CompareGapsConfig:
 
 
 def _results_file(folder_or_csv: str) -> str:
-    from .study.results import RESULTS_FILE  # noqa: PLC0415 - the study stack loads only for the commands that read one
+    from .study.results.rows import RESULTS_FILE  # noqa: PLC0415 - the study stack loads only for the commands that read one
 
     path = Path(folder_or_csv)
     return str(path / RESULTS_FILE if path.is_dir() else path)
@@ -335,8 +335,8 @@ def _results_file(folder_or_csv: str) -> str:
 
 def cmd_compare_gaps(args: list[str]) -> None:
     # the study's statistics (numpy only, but through the study package): only when this command runs
-    from .study.compare import Side, comparison_lines  # noqa: PLC0415
-    from .study.results import read_results  # noqa: PLC0415
+    from .study.results.compare import Side, comparison_lines  # noqa: PLC0415
+    from .study.results.rows import read_results  # noqa: PLC0415
 
     cfg = parse_config(CompareGapsConfig, args, "compare-gaps")
     sides = (
@@ -356,7 +356,7 @@ class CompareRerunsConfig:
     """``factorworld compare-reruns``: every evaluation step two runs both made (same key), per cell the first
     run's successes with its Wilson 95% interval, the rerun's, whether the rerun lies within it and its gap within
     the first's paired interval, and (with ``episodes.parquet`` on both sides) how many episodes end alike. Exit
-    status 1 when a cell lies outside (``study/rerun.py``).
+    status 1 when a cell lies outside (``study/results/rerun.py``).
 
     Attributes:
         first: The first run's folder (holds ``results.csv``).
@@ -378,9 +378,9 @@ class CompareRerunsConfig:
 
 def cmd_compare_reruns(args: list[str]) -> None:
     # reading episodes.parquet and the study's statistics: only when this command runs
-    from .study.episodes import EPISODES_FILE, read_episodes  # noqa: PLC0415
-    from .study.rerun import compare_reruns, rerun_lines  # noqa: PLC0415
-    from .study.results import read_results  # noqa: PLC0415
+    from .study.results.episodes import EPISODES_FILE, read_episodes  # noqa: PLC0415
+    from .study.results.rerun import compare_reruns, rerun_lines  # noqa: PLC0415
+    from .study.results.rows import read_results  # noqa: PLC0415
 
     cfg = parse_config(CompareRerunsConfig, args, "compare-reruns")
     folders = [Path(cfg.first), Path(cfg.rerun)]
@@ -394,7 +394,7 @@ def cmd_compare_reruns(args: list[str]) -> None:
 @dataclass
 class SyncDocsConfig:
     """``factorworld sync-docs``: regenerate every committed study report (``docs/results/<study>/``) and rewrite
-    the tables of ``docs/*.md`` fenced from them (``study/published.py``).
+    the tables of ``docs/*.md`` fenced from them (``study/report/published.py``).
 
     Attributes:
         check: Change nothing; name what is stale and exit 1 if anything is.
@@ -411,7 +411,7 @@ class SyncDocsConfig:
 
 def cmd_sync_docs(args: list[str]) -> None:
     # the study's configs check their policies with LeRobot (~4 s): only when this command runs
-    from .study.published import RESULTS_ROOT, committed_studies, stale_published, sync_published  # noqa: PLC0415
+    from .study.report.published import RESULTS_ROOT, committed_studies, stale_published, sync_published  # noqa: PLC0415
 
     cfg = parse_config(SyncDocsConfig, ["--check=true" if arg == "--check" else arg for arg in args], "sync-docs")
     root = Path(cfg.root)

@@ -30,7 +30,7 @@ class TaskFamily:
         sampling_options: The ``SamplingOptions`` fields only this family reads.
         conditions: Evaluation conditions the family adds to the factor shifts.
         report_entry_point: Where the family's part of a study report lives (``"module:attr"``, a
-            ``study.family_report.FamilyReport`` above the study); ``""``: the family adds nothing to reports.
+            ``study.report.family_report.FamilyReport`` above the study); ``""``: the family adds nothing to reports.
     """
 
     name: ClassVar[str] = ""

@@ -3,7 +3,7 @@
 Every finding's config prints its own ``--dry-run`` cost as if it ran alone, but the findings share steps (a step
 with the same key is the same result: F3's seed-0 datasets and trainings are F1's, F5's, F8's, ...), and
 ``scripts/run_findings.sh`` runs them in an order that reuses each finished study's steps. This script plans every
-config listed there, in that order, and estimates with the study's cost model (``study/cost.py``, 2 cores) each
+config listed there, in that order, and estimates with the study's cost model (``study/plan/cost.py``, 2 cores) each
 one's steps that no config before it has: the set's cost with shared steps counted once. It also totals the set
 of each finding's first config (F1 to F9, one each: what issue 19 sized at about 12 hours), the others being
 follow-ups that test an explanation. Plans only: nothing runs; it reads the configs and the cost model.
@@ -22,9 +22,9 @@ import sys
 from pathlib import Path
 
 from lerobot_factorworld.core.settings import parse_config
-from lerobot_factorworld.study import cost
-from lerobot_factorworld.study.config import StudyConfig
-from lerobot_factorworld.study.plan import Plan, make_plan
+from lerobot_factorworld.study.plan import cost
+from lerobot_factorworld.study.plan.config import StudyConfig
+from lerobot_factorworld.study.plan.grid import Plan, make_plan
 
 REPO_ROOT = Path(__file__).resolve().parents[1]
 RUN_FINDINGS = REPO_ROOT / "scripts" / "run_findings.sh"

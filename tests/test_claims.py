@@ -1,4 +1,4 @@
-"""Verdicts on the paper's claims (study/claims.py) from synthetic results.csv files whose truth is known:
+"""Verdicts on the paper's claims (study/results/claims.py) from synthetic results.csv files whose truth is known:
 each kind of claim gives each of the four verdicts, Holm's correction turns a borderline verdict, and the
 committed quick study's ordering is not resolved."""
 
@@ -8,13 +8,13 @@ from pathlib import Path
 
 import pytest
 
-from lerobot_factorworld.study.aggregate import method_rho_differences
-from lerobot_factorworld.study.claim_config import ClaimConfig
-from lerobot_factorworld.study.claims import AGREES, CAPPED, DISAGREES, NOT_RESOLVED, decide, study_claims
-from lerobot_factorworld.study.config import MethodConfig, StudyConfig
 from lerobot_factorworld.study.paper import PAPER_FACTOR_RANKS
-from lerobot_factorworld.study.report import load_config, regenerate_report
-from lerobot_factorworld.study.results import read_results, write_results
+from lerobot_factorworld.study.plan.claim_config import ClaimConfig
+from lerobot_factorworld.study.plan.config import MethodConfig, StudyConfig
+from lerobot_factorworld.study.report.write import load_config, regenerate_report
+from lerobot_factorworld.study.results.aggregate import method_rho_differences
+from lerobot_factorworld.study.results.claims import AGREES, CAPPED, DISAGREES, NOT_RESOLVED, decide, study_claims
+from lerobot_factorworld.study.results.rows import read_results, write_results
 
 ROOT = Path(__file__).resolve().parents[1]
 SEEDS = (0, 1, 2, 3, 4)

@@ -1,4 +1,4 @@
-"""One factor's gap across two studies (``study/compare.py``, ``factorworld compare-gaps``): the point estimates are
+"""One factor's gap across two studies (``study/results/compare.py``, ``factorworld compare-gaps``): the point estimates are
 the studies' own seed means, the difference's interval behaves (0 for a study against itself, away from 0 for a
 large effect), bad input is refused naming the valid choices, and the command prints what docs/findings.md quotes."""
 
@@ -8,8 +8,8 @@ from pathlib import Path
 
 import pytest
 
-from lerobot_factorworld.study.compare import Side, compare_gaps
-from lerobot_factorworld.study.results import read_results
+from lerobot_factorworld.study.results.compare import Side, compare_gaps
+from lerobot_factorworld.study.results.rows import read_results
 
 ROOT = Path(__file__).resolve().parents[1]
 RESULTS = ROOT / "docs" / "results"

@@ -19,8 +19,8 @@ from lerobot_factorworld.cli import main as factorworld
 from lerobot_factorworld.core.settings import parse_config
 from lerobot_factorworld.datasets.collect import CollectConfig, collect
 from lerobot_factorworld.factors.values import save_configs
-from lerobot_factorworld.study.config import StudyConfig
-from lerobot_factorworld.study.plan import make_plan
+from lerobot_factorworld.study.plan.config import StudyConfig
+from lerobot_factorworld.study.plan.grid import make_plan
 
 GOLDEN = Path(__file__).parent / "data" / "compat"
 REPO = Path(__file__).resolve().parents[1]

@@ -14,9 +14,9 @@ from pathlib import Path
 import pytest
 
 from lerobot_factorworld.cli import main
-from lerobot_factorworld.study.html_report import HTML_FILE
-from lerobot_factorworld.study.markdown import REPORT_FILE, commit_line
-from lerobot_factorworld.study.published import (
+from lerobot_factorworld.study.report.html_report import HTML_FILE
+from lerobot_factorworld.study.report.markdown import REPORT_FILE, commit_line
+from lerobot_factorworld.study.report.published import (
     RESULTS_ROOT,
     check_docs,
     committed_studies,
@@ -27,8 +27,8 @@ from lerobot_factorworld.study.published import (
     report_table,
     sync_docs,
 )
-from lerobot_factorworld.study.report import NO_TIMINGS, regenerate_report
-from lerobot_factorworld.study.results import read_results
+from lerobot_factorworld.study.report.write import NO_TIMINGS, regenerate_report
+from lerobot_factorworld.study.results.rows import read_results
 
 ROOT = Path(__file__).resolve().parents[1]
 DATA = ROOT / "tests" / "data" / "results"

@@ -1,4 +1,4 @@
-"""``episodes.parquet`` (one row per evaluated episode, ``study/episodes.py``), its dataset card and its push.
+"""``episodes.parquet`` (one row per evaluated episode, ``study/results/episodes.py``), its dataset card and its push.
 
 Fast: a small study runs in this process with fake collect and eval runners (as in test_provenance.py) and
 the real report. The fake collection writes the side-car ``factorworld collect`` would (the real sampling,
@@ -27,9 +27,12 @@ from lerobot_factorworld.core.settings import SettingError, parse_config
 from lerobot_factorworld.datasets import hub
 from lerobot_factorworld.protocol.conditions import fingerprint
 from lerobot_factorworld.protocol.sidecar import SIDECAR
-from lerobot_factorworld.study import episodes, runner, steps
-from lerobot_factorworld.study.config import StudyConfig
-from lerobot_factorworld.study.episodes import (
+from lerobot_factorworld.study import runner
+from lerobot_factorworld.study.plan.config import StudyConfig
+from lerobot_factorworld.study.plan.grid import make_plan
+from lerobot_factorworld.study.report.write import regenerate_report
+from lerobot_factorworld.study.results import episodes
+from lerobot_factorworld.study.results.episodes import (
     EPISODE_COLUMN_NAMES,
     EPISODES_FILE,
     SCHEMA,
@@ -39,11 +42,16 @@ from lerobot_factorworld.study.episodes import (
     read_episodes,
     read_episodes_table,
 )
-from lerobot_factorworld.study.executors import InlineExecutor
-from lerobot_factorworld.study.inputs import CollectInputs, EvalInputs
-from lerobot_factorworld.study.plan import make_plan
-from lerobot_factorworld.study.report import regenerate_report
-from lerobot_factorworld.study.results import RESULTS_FILE, Evaluation, commits_of, finished_evaluations, read_results
+from lerobot_factorworld.study.results.rows import (
+    RESULTS_FILE,
+    Evaluation,
+    commits_of,
+    finished_evaluations,
+    read_results,
+)
+from lerobot_factorworld.study.run import steps
+from lerobot_factorworld.study.run.executors import InlineExecutor
+from lerobot_factorworld.study.run.inputs import CollectInputs, EvalInputs
 
 SETTINGS = {
     "name": "records",
@@ -399,7 +407,7 @@ def test_offline_the_push_says_so_in_one_line(study, tmp_path):
     """The real path, no fake: ``HF_HUB_OFFLINE=1`` (read when huggingface_hub is imported: a new process)."""
     _, outcome = study
     code = (
-        "from lerobot_factorworld.study.episodes import push_results\n"
+        "from lerobot_factorworld.study.results.episodes import push_results\n"
         f"pushed, line = push_results({str(outcome.study_dir)!r}, {REPO!r})\n"
         "print(pushed)\nprint(line)\n"
     )

@@ -1,8 +1,8 @@
-"""report.html (study/html_report.py): written from synthetic results.csv rows and a synthetic episodes.json with
+"""report.html (study/report/html_report.py): written from synthetic results.csv rows and a synthetic episodes.json with
 tiny real WebM files, its figures draw the intervals report.md's tables print, its claims are the decided ones,
 it is deterministic and self-contained (plotly.min.js next to it, written once), and, in a real headless Chromium
 (the system's, driven by Playwright), it loads without console errors, every video loads, and the paired viewer
-plays episode i of train and of a shift in sync. And the PNG figures (study/plots.py) draw the intervals of the
+plays episode i of train and of a shift in sync. And the PNG figures (study/report/plots.py) draw the intervals of the
 tables they stand beside, a figure against N only with two or more N, the per-task ordering when tasks disagree."""
 
 from __future__ import annotations
@@ -16,14 +16,14 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from lerobot_factorworld.study.aggregate import factor_gap_bootstrap, per_task_success, task_orderings
-from lerobot_factorworld.study.claims_markdown import claim_rows
-from lerobot_factorworld.study.config import MethodConfig, StudyConfig
-from lerobot_factorworld.study.episode_videos import MANIFEST
-from lerobot_factorworld.study.html_report import HTML_FILE, PLOTLY_JS, write_html_report, write_plotly_js
-from lerobot_factorworld.study.markdown import decide_claims, render
-from lerobot_factorworld.study.published import report_table
-from lerobot_factorworld.study.recording import VIDEOS_DIR
+from lerobot_factorworld.study.plan.config import MethodConfig, StudyConfig
+from lerobot_factorworld.study.report.claims_markdown import claim_rows
+from lerobot_factorworld.study.report.episode_videos import MANIFEST
+from lerobot_factorworld.study.report.html_report import HTML_FILE, PLOTLY_JS, write_html_report, write_plotly_js
+from lerobot_factorworld.study.report.markdown import decide_claims, render
+from lerobot_factorworld.study.report.published import report_table
+from lerobot_factorworld.study.results.aggregate import factor_gap_bootstrap, per_task_success, task_orderings
+from lerobot_factorworld.study.run.recording import VIDEOS_DIR
 
 ROOT = Path(__file__).resolve().parents[1]
 FACTORS = ["camera_pos", "table_texture", "light"]
@@ -287,13 +287,13 @@ def test_the_page_is_deterministic_loads_nothing_from_the_network_and_writes_plo
 
 
 def test_render_report_writes_report_html_and_decides_the_claims_once(monkeypatch, tmp_path):
-    from lerobot_factorworld.study import markdown
-    from lerobot_factorworld.study.report import render_report
+    from lerobot_factorworld.study.report import markdown
+    from lerobot_factorworld.study.report.write import render_report
 
     calls = []
     decide = markdown.decide
     monkeypatch.setattr(markdown, "decide", lambda *a: calls.append(1) or decide(*a))
-    monkeypatch.setattr("lerobot_factorworld.study.report.write_plots", lambda rows, cfg, out: [])
+    monkeypatch.setattr("lerobot_factorworld.study.report.write.write_plots", lambda rows, cfg, out: [])
     cfg, rows = synthetic_study()
     report, _ = render_report(cfg, rows, tmp_path, "test", len(rows))
     assert len(calls) == 1
@@ -305,7 +305,7 @@ def test_render_report_writes_report_html_and_decides_the_claims_once(monkeypatc
 def test_the_committed_quick_report_html_is_what_its_results_csv_regenerates(tmp_path):
     from plotly.offline import get_plotlyjs
 
-    from lerobot_factorworld.study.report import regenerate_report
+    from lerobot_factorworld.study.report.write import regenerate_report
 
     folder = ROOT / "docs" / "results" / "quick"
     regenerate_report(folder / "results.csv", out=tmp_path)
@@ -321,7 +321,7 @@ def test_the_committed_quick_report_html_is_what_its_results_csv_regenerates(tmp
 @pytest.fixture
 def drawn_intervals(monkeypatch):
     """Every interval the PNG plots draw, per plot: [(xs, intervals)] of each ``plots._intervals`` call."""
-    from lerobot_factorworld.study import plots
+    from lerobot_factorworld.study.report import plots
 
     calls: dict[str, list] = {}
     draw = plots._intervals
@@ -342,8 +342,8 @@ def drawn_intervals(monkeypatch):
 
 
 def test_the_figures_error_bars_are_the_tables_intervals(drawn_intervals, tmp_path):
-    from lerobot_factorworld.study.aggregate import gap_against_n
-    from lerobot_factorworld.study.plots import CAPTIONS, write_plots
+    from lerobot_factorworld.study.report.plots import CAPTIONS, write_plots
+    from lerobot_factorworld.study.results.aggregate import gap_against_n
 
     cfg, rows = synthetic_study()
     drawn = {p.name for p in write_plots(rows, cfg, tmp_path)}
@@ -376,7 +376,7 @@ def test_the_figures_error_bars_are_the_tables_intervals(drawn_intervals, tmp_pa
 def test_a_figure_against_n_needs_two_n_and_the_per_task_ordering_a_disagreement(tmp_path):
     from dataclasses import replace
 
-    from lerobot_factorworld.study.plots import write_plots
+    from lerobot_factorworld.study.report.plots import write_plots
 
     cfg, rows = synthetic_study()
     one_n = replace(cfg, n_train_envs=[2])

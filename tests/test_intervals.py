@@ -8,18 +8,20 @@ import random
 import numpy as np
 import pytest
 
-from lerobot_factorworld.study import aggregate, metrics, power
-from lerobot_factorworld.study.claims import decide, study_claims
-from lerobot_factorworld.study.config import EvalSettings, StudyConfig
-from lerobot_factorworld.study.markdown import (
+from lerobot_factorworld.study import metrics
+from lerobot_factorworld.study.paper import PAPER_FACTOR_RANKS
+from lerobot_factorworld.study.plan import power
+from lerobot_factorworld.study.plan.config import EvalSettings, StudyConfig
+from lerobot_factorworld.study.plan.grid import DEFAULT_WIDTHS
+from lerobot_factorworld.study.report.markdown import (
     _gap_against_n_section,
     _ordering_section,
     _pairs_section,
     _per_task_table,
     _radius_section,
 )
-from lerobot_factorworld.study.paper import PAPER_FACTOR_RANKS
-from lerobot_factorworld.study.plan import DEFAULT_WIDTHS
+from lerobot_factorworld.study.results import aggregate
+from lerobot_factorworld.study.results.claims import decide, study_claims
 
 FACTORS = list(PAPER_FACTOR_RANKS)
 HARDNESS = dict(zip(FACTORS, (0.3, 0.25, 0.15, 0.12, 0.05, 0.0, 0.0)))

@@ -61,7 +61,7 @@ def _documented_layers() -> list[set[str]]:
 
 
 def test_the_layers_are_the_documented_ones_and_hold_every_module_once():
-    (layers,) = [c["layers"] for c in _contracts() if c["type"] == "layers"]
+    (layers,) = [c["layers"] for c in _contracts() if c.get("containers") == [PACKAGE]]
     configured = [set(layer.split(" | ")) for layer in reversed(layers)]  # bottom first, as the docs
     assert configured == _documented_layers()
     modules = [m for layer in configured for m in layer]
@@ -80,7 +80,8 @@ def test_one_policy_importing_the_other_breaks_the_independence_contract(tmp_pat
     out = _lint_imports(root)
     assert out.returncode != 0
     text = _text(out)
-    assert f"{independence['name']} BROKEN" in text and "Contracts: 1 kept, 1 broken." in text
+    kept = len(_contracts()) - 1
+    assert f"{independence['name']} BROKEN" in text and f"Contracts: {kept} kept, 1 broken." in text
     assert f"{PACKAGE}.policies.bc is not allowed to import {PACKAGE}.policies.rt1" in text
 
 
@@ -125,3 +126,30 @@ def test_an_unexplained_import_inside_a_function_fails_ruff(tmp_path):
     tests.mkdir()
     (tests / "test_late.py").write_text("def test_late():\n    import json\n\n    assert json\n")
     assert _ruff(root, tests / "test_late.py").returncode == 0
+
+
+def test_the_study_subpackages_hold_every_study_module_once_in_the_documented_order():
+    (layers,) = [c["layers"] for c in _contracts() if c.get("containers") == [f"{PACKAGE}.study"]]
+    configured = [set(layer.split(" | ")) for layer in reversed(layers)]
+    study = REPO / PACKAGE / "study"
+    found = {p.stem for p in study.glob("*.py") if p.name != "__init__.py"}
+    found |= {p.name for p in study.iterdir() if (p / "__init__.py").is_file()}
+    assert sorted(m for layer in configured for m in layer) == sorted(found)
+    # the study package's docstring lists them in the same order, bottom first
+    doc = (study / "__init__.py").read_text()
+    order = [doc.index(f"``{m}``") for layer in configured for m in sorted(layer)]
+    assert [doc.index(f"``{sorted(layer)[0]}``") for layer in configured] == sorted(
+        doc.index(f"``{sorted(layer)[0]}``") for layer in configured
+    )
+    assert len(order) == len(found)
+
+
+def test_a_plan_module_importing_the_results_breaks_the_study_contract(tmp_path):
+    root = _copy(tmp_path)
+    low = root / PACKAGE / "study" / "plan" / "grid.py"
+    low.write_text(low.read_text() + "\nfrom ..results import aggregate  # the plan reaching up to the results\n")
+    out = _lint_imports(root)
+    assert out.returncode != 0
+    text = _text(out)
+    assert f"{PACKAGE}.study.plan is not allowed to import {PACKAGE}.study.results" in text
+    assert f"{PACKAGE}.study.plan.grid -> {PACKAGE}.study.results.aggregate" in text

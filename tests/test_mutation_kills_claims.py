@@ -1,4 +1,4 @@
-"""Verdicts on the paper's claims (study/claims.py) where mutation testing found the suite silent (docs/testing.md).
+"""Verdicts on the paper's claims (study/results/claims.py) where mutation testing found the suite silent (docs/testing.md).
 
 tests/test_claims.py checks each kind's four verdicts; the numbers a claims table prints were not checked. Here
 every comparison of every kind (both trend directions, over N and over the radius, both pair relations) is
@@ -15,10 +15,12 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from lerobot_factorworld.study import claims, metrics, power
-from lerobot_factorworld.study.claim_config import ClaimConfig
-from lerobot_factorworld.study.claims import AGREES, CAPPED, DISAGREES, NOT_RESOLVED, Decided, decide
-from lerobot_factorworld.study.config import MethodConfig, StudyConfig
+from lerobot_factorworld.study import metrics
+from lerobot_factorworld.study.plan import power
+from lerobot_factorworld.study.plan.claim_config import ClaimConfig
+from lerobot_factorworld.study.plan.config import MethodConfig, StudyConfig
+from lerobot_factorworld.study.results import claims
+from lerobot_factorworld.study.results.claims import AGREES, CAPPED, DISAGREES, NOT_RESOLVED, Decided, decide
 
 SEEDS = (0, 1, 2, 3, 4)
 EPISODES = 100

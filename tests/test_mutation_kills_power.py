@@ -1,4 +1,4 @@
-"""The power of a plan (study/power.py) where mutation testing found the suite silent (docs/testing.md): a cell's
+"""The power of a plan (study/plan/power.py) where mutation testing found the suite silent (docs/testing.md): a cell's
 resolvable gap against an oracle on explicit paired episodes (other sizes, other z, the edges of both searches),
 the z of the pair metric, a sweep of one radius, and ``--dry-run``'s power lines word for word."""
 
@@ -8,8 +8,9 @@ import math
 
 import pytest
 
-from lerobot_factorworld.study import metrics, power
-from lerobot_factorworld.study.config import EvalSettings, StudyConfig
+from lerobot_factorworld.study import metrics
+from lerobot_factorworld.study.plan import power
+from lerobot_factorworld.study.plan.config import EvalSettings, StudyConfig
 
 
 def _by_episodes(n: int, p_train: float, z: float = metrics.Z95) -> float:
@@ -103,7 +104,7 @@ def test_dry_run_power_lines_word_for_word():
     assert power.power_lines(cfg, planned=(0.25, 0.5, 0.9)) == [
         "  power: smallest effect whose 95% interval excludes 0, at planned P_T (pairs: P_min) below (4 paired "
         "episodes per cell, 3 seed(s); episode noise only, so lower bounds; summaries assume independent outcomes; "
-        "methods in study/power.py):",
+        "methods in study/plan/power.py):",
         "                                                                P=0.25   P=0.5    P=0.9  ",
         "    gap, one cell (Newcombe; no reversals)                         n/a     n/a   0.750",
         "    gap, one cell (Newcombe; independent outcomes)                 n/a     n/a   0.662",

@@ -1,4 +1,4 @@
-"""``results.csv`` rows (study/results.py) where mutation testing found the suite silent (docs/testing.md): the
+"""``results.csv`` rows (study/results/rows.py) where mutation testing found the suite silent (docs/testing.md): the
 study and policy columns, a given checkpoint's policy, undefined gaps as NaN, the radius of single-factor rows
 only, an evaluation without episodes, a commit outside git, the file's line ends and its radius column read
 back. Evaluation steps are built by hand (no study runs); the outcomes differ between train and the shifts."""
@@ -10,9 +10,9 @@ import math
 import pytest
 
 from lerobot_factorworld.core.provenance import Provenance
-from lerobot_factorworld.study import metrics, steps
-from lerobot_factorworld.study.config import MethodConfig, StudyConfig
-from lerobot_factorworld.study.results import (
+from lerobot_factorworld.study import metrics
+from lerobot_factorworld.study.plan.config import MethodConfig, StudyConfig
+from lerobot_factorworld.study.results.rows import (
     RESULT_COLUMNS,
     Evaluation,
     csv_text,
@@ -22,6 +22,7 @@ from lerobot_factorworld.study.results import (
     stage_counts_text,
     write_results,
 )
+from lerobot_factorworld.study.run import steps
 
 TRAIN = [True, True, True, False, True, True, False, True]  # 6 of 8
 SHIFTED = [True, False, False, False, True, False, True, False]  # 3 of 8: 4 train-only, 1 shifted-only

@@ -1,4 +1,4 @@
-"""Stale-step detection (study/stale.py) where mutation testing found the suite silent (docs/testing.md): the
+"""Stale-step detection (study/plan/stale.py) where mutation testing found the suite silent (docs/testing.md): the
 stale line's label count at exactly STALE_LABELS, the strict refusal's text, when the dirty-tree part joins the
 warning, the order and names of the folders set aside. Fast: result files written by hand, no step runs."""
 
@@ -12,9 +12,10 @@ import pytest
 
 from lerobot_factorworld.core import provenance
 from lerobot_factorworld.core.provenance import Provenance
-from lerobot_factorworld.study import stale, steps
-from lerobot_factorworld.study.config import EvalSettings, MethodConfig, StudyConfig
-from lerobot_factorworld.study.plan import Plan, make_plan
+from lerobot_factorworld.study.plan import stale
+from lerobot_factorworld.study.plan.config import EvalSettings, MethodConfig, StudyConfig
+from lerobot_factorworld.study.plan.grid import Plan, make_plan
+from lerobot_factorworld.study.run import steps
 
 OTHER = "826fe542cafcf25ef4dd4d5f7e92595c9abe6388"
 NOW = Provenance("a" * 40, True, "1" * 64)

@@ -11,7 +11,7 @@ from pathlib import Path
 import pytest
 
 from lerobot_factorworld.cli import main
-from lerobot_factorworld.study.named import STUDIES_DIR, resolve_study_config, study_names
+from lerobot_factorworld.study.plan.named import STUDIES_DIR, resolve_study_config, study_names
 
 ROOT = Path(__file__).resolve().parents[1]
 

@@ -6,11 +6,11 @@ from __future__ import annotations
 import pytest
 
 from lerobot_factorworld.datasets.merge import features_mismatch, merge_datasets
-from lerobot_factorworld.study.config import MethodConfig, StudyConfig, TrainSettings
-from lerobot_factorworld.study.cost import load_model, step_cost
-from lerobot_factorworld.study.inputs import TrainInputs
-from lerobot_factorworld.study.plan import make_plan
-from lerobot_factorworld.study.steps import epoch_frames, train_steps
+from lerobot_factorworld.study.plan.config import MethodConfig, StudyConfig, TrainSettings
+from lerobot_factorworld.study.plan.cost import load_model, step_cost
+from lerobot_factorworld.study.plan.grid import make_plan
+from lerobot_factorworld.study.run.inputs import TrainInputs
+from lerobot_factorworld.study.run.steps import epoch_frames, train_steps
 from lerobot_factorworld.tasks import get_task
 
 BC = {"name": "bc", "policy": {"type": "bc"}}

@@ -19,7 +19,7 @@ EVAL = ["--eval.n_test_envs=2", "--eval.episodes=2", "--eval.max_episode_steps=4
 
 def _profile_config(checkpoint: Path, out: Path, *args: str):
     from lerobot_factorworld.core.settings import parse_config
-    from lerobot_factorworld.study.policy_profile import ProfileConfig
+    from lerobot_factorworld.study.plan.policy_profile import ProfileConfig
 
     flags = [f"--policy.path={checkpoint}", *PROFILE, *EVAL, f"--out_dir={out}", *args]
     return parse_config(ProfileConfig, flags, "profile")
@@ -27,8 +27,8 @@ def _profile_config(checkpoint: Path, out: Path, *args: str):
 
 @pytest.mark.slow
 def test_profile_writes_a_studys_outputs_without_collecting_or_training(bc_checkpoint, tmp_path):
-    from lerobot_factorworld.study.episodes import read_episodes
-    from lerobot_factorworld.study.results import RESULT_COLUMNS
+    from lerobot_factorworld.study.results.episodes import read_episodes
+    from lerobot_factorworld.study.results.rows import RESULT_COLUMNS
 
     out = tmp_path / "profile"
     cmd = [str(FACTORWORLD), "profile", f"--policy.path={bc_checkpoint}", *PROFILE, *EVAL, f"--out_dir={out}"]
@@ -58,8 +58,8 @@ def test_profile_writes_a_studys_outputs_without_collecting_or_training(bc_check
 
     # the same command again: every evaluation cached, the same results
     cfg = _profile_config(bc_checkpoint, out).study()
-    from lerobot_factorworld.study.plan import make_plan
-    from lerobot_factorworld.study.steps import is_done
+    from lerobot_factorworld.study.plan.grid import make_plan
+    from lerobot_factorworld.study.run.steps import is_done
 
     assert all(is_done(step, out) for step in make_plan(cfg).steps)
 
@@ -72,9 +72,9 @@ def test_train_defaults_to_the_checkpoints_own_dataset(bc_checkpoint, tiny_datas
     from lerobot_factorworld.core.settings import parse_config
     from lerobot_factorworld.protocol.sampling import sample_configs
     from lerobot_factorworld.protocol.sidecar import SIDECAR, read_dataset_condition
-    from lerobot_factorworld.study.inputs import EvalInputs
-    from lerobot_factorworld.study.plan import make_plan
-    from lerobot_factorworld.study.policy_profile import ProfileConfig
+    from lerobot_factorworld.study.plan.grid import make_plan
+    from lerobot_factorworld.study.plan.policy_profile import ProfileConfig
+    from lerobot_factorworld.study.run.inputs import EvalInputs
 
     def profile(checkpoint, *args: str) -> ProfileConfig:
         flags = [f"--policy.path={checkpoint}", "--task=pick-place", "--factors=[light]", *EVAL, *args]
@@ -109,9 +109,9 @@ def test_train_defaults_to_the_checkpoints_own_dataset(bc_checkpoint, tiny_datas
 
 
 def test_a_checkpoints_key_is_its_content(factorworld_checkpoint, tmp_path):
-    from lerobot_factorworld.study.checkpoint import checkpoint_folder
-    from lerobot_factorworld.study.inputs import EvalInputs
-    from lerobot_factorworld.study.plan import make_plan
+    from lerobot_factorworld.study.plan.grid import make_plan
+    from lerobot_factorworld.study.run.checkpoint import checkpoint_folder
+    from lerobot_factorworld.study.run.inputs import EvalInputs
 
     def keys(checkpoint: Path) -> set[str]:
         plan = make_plan(_profile_config(checkpoint, tmp_path / "out").study())
@@ -134,8 +134,8 @@ def test_a_hub_id_in_the_local_cache_is_used_offline(factorworld_checkpoint, tmp
     downloaded), keyed by content as the same files in a folder are; the profile plans it."""
     import huggingface_hub
 
-    from lerobot_factorworld.study.checkpoint import fetch_checkpoint, keyed_checkpoint, local_folder
-    from lerobot_factorworld.study.plan import make_plan
+    from lerobot_factorworld.study.plan.grid import make_plan
+    from lerobot_factorworld.study.run.checkpoint import fetch_checkpoint, keyed_checkpoint, local_folder
 
     cache, revision = tmp_path / "hub", "0123456789abcdef0123456789abcdef01234567"
     repo = cache / "models--someone--bc_pick_place"
@@ -156,11 +156,11 @@ def test_a_hub_id_in_the_local_cache_is_used_offline(factorworld_checkpoint, tmp
 
 
 def test_a_study_mixing_a_trained_and_a_given_method_plans_both(factorworld_checkpoint, tmp_path):
-    from lerobot_factorworld.study.config import EvalSettings, MethodConfig, StudyConfig
-    from lerobot_factorworld.study.cost import describe
-    from lerobot_factorworld.study.executors import task_units
-    from lerobot_factorworld.study.inputs import CollectInputs, EvalInputs
-    from lerobot_factorworld.study.plan import make_plan
+    from lerobot_factorworld.study.plan.config import EvalSettings, MethodConfig, StudyConfig
+    from lerobot_factorworld.study.plan.cost import describe
+    from lerobot_factorworld.study.plan.grid import make_plan
+    from lerobot_factorworld.study.run.executors import task_units
+    from lerobot_factorworld.study.run.inputs import CollectInputs, EvalInputs
 
     cfg = StudyConfig(
         out_dir=str(tmp_path / "mixed"),

@@ -16,11 +16,13 @@ import pytest
 from lerobot_factorworld.core import provenance
 from lerobot_factorworld.core.provenance import Provenance, git_state, source_hash
 from lerobot_factorworld.core.settings import parse_config
-from lerobot_factorworld.study import runner, stale, steps
-from lerobot_factorworld.study.config import RUN_CONFIG_FILE, StudyConfig
-from lerobot_factorworld.study.executors import InlineExecutor
-from lerobot_factorworld.study.plan import Plan, make_plan
-from lerobot_factorworld.study.results import RESULT_COLUMNS, Evaluation, commits_of, csv_text, result_rows
+from lerobot_factorworld.study import runner
+from lerobot_factorworld.study.plan import stale
+from lerobot_factorworld.study.plan.config import RUN_CONFIG_FILE, StudyConfig
+from lerobot_factorworld.study.plan.grid import Plan, make_plan
+from lerobot_factorworld.study.results.rows import RESULT_COLUMNS, Evaluation, commits_of, csv_text, result_rows
+from lerobot_factorworld.study.run import steps
+from lerobot_factorworld.study.run.executors import InlineExecutor
 
 GIT = shutil.which("git")
 OTHER = "826fe542cafcf25ef4dd4d5f7e92595c9abe6388"  # a commit that is not this checkout's code
@@ -151,7 +153,7 @@ def ran(monkeypatch) -> list[steps.Step]:
     for kind in steps.KINDS:
         monkeypatch.setitem(steps.RUNNERS, kind, fake)
     monkeypatch.setattr(runner, "make_executor", lambda kind, study_dir, *a: InlineExecutor(study_dir, a[-1]))
-    monkeypatch.setattr(runner, "write_report", lambda *a: (None, None, []))  # report.py: tested elsewhere
+    monkeypatch.setattr(runner, "write_report", lambda *a: (None, None, []))  # report/write.py: tested elsewhere
     return out
 
 

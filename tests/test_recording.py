@@ -1,4 +1,4 @@
-"""Episodes recorded where they are made (study/recording.py): the env's observer hook gives every seeded
+"""Episodes recorded where they are made (study/run/recording.py): the env's observer hook gives every seeded
 episode's furthest stage and length, and the first episodes' frames as the policy saw them; they are written as
 WebM videos that decode to the same number of frames."""
 
@@ -7,7 +7,7 @@ import numpy as np
 
 from lerobot_factorworld.envs.factor_env import FactorWorldEnv
 from lerobot_factorworld.protocol.sampling import sample_configs, shift_configs
-from lerobot_factorworld.study.recording import EpisodeRecorder, write_recorded
+from lerobot_factorworld.study.run.recording import EpisodeRecorder, write_recorded
 
 
 def _run(env: FactorWorldEnv, seed: int, steps: int) -> list[np.ndarray]:

@@ -1,4 +1,4 @@
-"""A rerun against the results it repeats (``study/rerun.py``, ``factorworld compare-reruns``): cells matched by step
+"""A rerun against the results it repeats (``study/results/rerun.py``, ``factorworld compare-reruns``): cells matched by step
 key, the rerun's rate and gap checked against the first run's stated intervals, episodes compared one by one."""
 
 from __future__ import annotations
@@ -12,7 +12,7 @@ from pathlib import Path
 import pytest
 
 from lerobot_factorworld.study.metrics import paired_gap, wilson_interval
-from lerobot_factorworld.study.rerun import compare_reruns
+from lerobot_factorworld.study.results.rerun import compare_reruns
 
 ROOT = Path(__file__).resolve().parents[1]
 FACTORWORLD = str(Path(sys.executable).with_name("factorworld"))

@@ -168,7 +168,7 @@ def test_lerobot_env_config_takes_the_share_and_a_dataset_keeps_its_own(tmp_path
 
 
 def _study(**collect):
-    from lerobot_factorworld.study.config import CollectSettings, EvalSettings, StudyConfig
+    from lerobot_factorworld.study.plan.config import CollectSettings, EvalSettings, StudyConfig
 
     return StudyConfig(
         tasks=["door-open"],
@@ -182,9 +182,9 @@ def _study(**collect):
 
 
 def test_the_study_passes_the_share_to_collection_and_so_to_evaluation(tmp_path):
-    from lerobot_factorworld.study.inputs import CollectInputs, EvalInputs
-    from lerobot_factorworld.study.plan import make_plan
-    from lerobot_factorworld.study.steps import collect_config, eval_env_config
+    from lerobot_factorworld.study.plan.grid import make_plan
+    from lerobot_factorworld.study.run.inputs import CollectInputs, EvalInputs
+    from lerobot_factorworld.study.run.steps import collect_config, eval_env_config
 
     plan = make_plan(_study(rgb_fraction=0.25))
     collect = plan.of_kind("collect")[0]

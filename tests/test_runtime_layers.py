@@ -8,7 +8,7 @@ import sys
 
 from lerobot_factorworld.families import family_of
 from lerobot_factorworld.family_reports.pick import PICK_REPORT
-from lerobot_factorworld.study.family_report import NO_REPORT, report_of
+from lerobot_factorworld.study.report.family_report import NO_REPORT, report_of
 
 SCENE_ONLY = """
 import json, sys

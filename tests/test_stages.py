@@ -22,11 +22,10 @@ from lerobot_factorworld.envs.factor_env import FactorWorldEnv
 from lerobot_factorworld.experts import expert_action, expert_policy, rollout
 from lerobot_factorworld.pick import catalog
 from lerobot_factorworld.protocol.sampling import sample_configs
-from lerobot_factorworld.study.aggregate import stage_counts
-from lerobot_factorworld.study.markdown import REPORT_FILE
-from lerobot_factorworld.study.recording import EpisodeRecorder
-from lerobot_factorworld.study.report import regenerate_report
-from lerobot_factorworld.study.results import (
+from lerobot_factorworld.study.report.markdown import REPORT_FILE
+from lerobot_factorworld.study.report.write import regenerate_report
+from lerobot_factorworld.study.results.aggregate import stage_counts
+from lerobot_factorworld.study.results.rows import (
     RESULT_COLUMNS,
     Evaluation,
     csv_text,
@@ -35,7 +34,8 @@ from lerobot_factorworld.study.results import (
     result_rows,
     stage_counts_text,
 )
-from lerobot_factorworld.study.steps import Step, of_seeds
+from lerobot_factorworld.study.run.recording import EpisodeRecorder
+from lerobot_factorworld.study.run.steps import Step, of_seeds
 
 DATA = Path(__file__).resolve().parent / "data" / "results"
 OBJECT = ("none", "reached", "grasped", "moved", "succeeded")

@@ -57,8 +57,8 @@ def test_results_rows_hold_the_signed_gap_of_each_checkpoints_own_paired_episode
     another checkpoint's train episodes shows."""
     from types import SimpleNamespace
 
-    from lerobot_factorworld.study.results import Evaluation, read_results, result_rows, write_results
-    from lerobot_factorworld.study.steps import Step
+    from lerobot_factorworld.study.results.rows import Evaluation, read_results, result_rows, write_results
+    from lerobot_factorworld.study.run.steps import Step
 
     cfg = SimpleNamespace(name="s", methods=[SimpleNamespace(name="bc", policy={"type": "bc"})])
     seeds = list(range(1000, 1010))
@@ -118,9 +118,9 @@ def test_pair_metric_interaction_mean_se_and_spearman():
 
 
 def test_the_pairs_section_counts_cells_whose_pair_metric_is_undefined():
-    from lerobot_factorworld.study.config import StudyConfig
-    from lerobot_factorworld.study.markdown import _pairs_section
-    from lerobot_factorworld.study.plan import DEFAULT_WIDTHS
+    from lerobot_factorworld.study.plan.config import StudyConfig
+    from lerobot_factorworld.study.plan.grid import DEFAULT_WIDTHS
+    from lerobot_factorworld.study.report.markdown import _pairs_section
 
     cfg = StudyConfig(tasks=["door-open"], factors=["light", "camera_pos"], pairs=["light+camera_pos"], seeds=[0, 1])
 
@@ -152,8 +152,8 @@ def test_the_pairs_section_counts_cells_whose_pair_metric_is_undefined():
 
 def test_a_pick_study_report_sets_success_next_to_the_papers_real_robot_table():
     from lerobot_factorworld.family_reports.pick import real_robot_section as _real_robot_section
-    from lerobot_factorworld.study.config import StudyConfig
-    from lerobot_factorworld.study.plan import DEFAULT_WIDTHS
+    from lerobot_factorworld.study.plan.config import StudyConfig
+    from lerobot_factorworld.study.plan.grid import DEFAULT_WIDTHS
 
     cfg = StudyConfig(
         tasks=["pick"],
@@ -200,8 +200,8 @@ def test_a_pick_study_report_sets_success_next_to_the_papers_real_robot_table():
 def test_pairs_are_counted_against_the_papers_band_per_task():
     """A task where the singles barely matter (pairs at their harder factor) beside one where pairs compound:
     averaged over tasks the band hides the first; per task both show."""
-    from lerobot_factorworld.study.aggregate import pair_bands
-    from lerobot_factorworld.study.plan import DEFAULT_WIDTHS
+    from lerobot_factorworld.study.plan.grid import DEFAULT_WIDTHS
+    from lerobot_factorworld.study.results.aggregate import pair_bands
 
     def row(task, condition, rate, p_train=1.0):
         return {
@@ -243,10 +243,10 @@ def test_pairs_are_counted_against_the_papers_band_per_task():
 def test_methods_are_set_against_the_first_per_factor_and_group():
     """Two methods on two seeds: the report's "Methods against" table gives each mean gap, their difference
     and its bootstrap interval, per factor and per section 5.2 group that the study covers."""
-    from lerobot_factorworld.study.aggregate import method_gap_differences
-    from lerobot_factorworld.study.config import StudyConfig
-    from lerobot_factorworld.study.markdown import _methods_section
-    from lerobot_factorworld.study.plan import DEFAULT_WIDTHS
+    from lerobot_factorworld.study.plan.config import StudyConfig
+    from lerobot_factorworld.study.plan.grid import DEFAULT_WIDTHS
+    from lerobot_factorworld.study.report.markdown import _methods_section
+    from lerobot_factorworld.study.results.aggregate import method_gap_differences
 
     def row(method, seed, condition, successes):
         return {
@@ -401,7 +401,7 @@ def _toy_config(
     """The toy study's settings in ``out``; ``n_train_envs`` and ``factors`` (YAML lists) narrow it to a part of
     its plan."""
     from lerobot_factorworld.core.settings import parse_config
-    from lerobot_factorworld.study.config import StudyConfig
+    from lerobot_factorworld.study.plan.config import StudyConfig
 
     path = out.parent / f"{out.name}.yaml"
     text = TOY.format(out=out, executor=executor)
@@ -429,8 +429,8 @@ def toy(tmp_path_factory):
 def test_toy_study_end_to_end(toy):
     import csv
 
-    from lerobot_factorworld.study.episodes import EPISODES_FILE, read_episodes
-    from lerobot_factorworld.study.results import RESULT_COLUMNS
+    from lerobot_factorworld.study.results.episodes import EPISODES_FILE, read_episodes
+    from lerobot_factorworld.study.results.rows import RESULT_COLUMNS
 
     cfg, outcome = toy
     assert not outcome.failed, outcome.failed
@@ -469,7 +469,7 @@ def test_toy_study_end_to_end(toy):
 @TOY_GROUP
 @pytest.mark.slow
 def test_rerun_does_no_new_work_and_interrupted_study_resumes(toy):
-    from lerobot_factorworld.study.plan import make_plan
+    from lerobot_factorworld.study.plan.grid import make_plan
     from lerobot_factorworld.study.runner import run_study
 
     cfg, first = toy
@@ -492,7 +492,7 @@ def test_rerun_does_no_new_work_and_interrupted_study_resumes(toy):
 @TOY_GROUP
 @pytest.mark.slow
 def test_the_report_regenerated_from_results_csv_alone_is_the_studys_own(toy, tmp_path):
-    from lerobot_factorworld.study.report import NO_TIMINGS, regenerate_report
+    from lerobot_factorworld.study.report.write import NO_TIMINGS, regenerate_report
 
     cfg, outcome = toy
     config = Path(cfg.out_dir).with_suffix(".yaml")  # the toy's config file (_toy_config)
@@ -510,7 +510,7 @@ def test_the_report_regenerated_from_results_csv_alone_is_the_studys_own(toy, tm
 
 
 def test_changing_one_setting_changes_only_the_steps_that_depend_on_it(tmp_path):
-    from lerobot_factorworld.study.plan import make_plan
+    from lerobot_factorworld.study.plan.grid import make_plan
 
     cfg, _ = _toy_config(tmp_path / "toy")
     keys = {kind: {s.key for s in make_plan(cfg).of_kind(kind)} for kind in ("collect", "train", "eval")}
@@ -529,8 +529,8 @@ def test_dataset_gives_the_training_condition_and_mismatches_are_refused(toy, tm
     from lerobot_factorworld.adapters.env_config import LEROBOT_IMAGE_FEATURE, FactorWorldEnvConfig
     from lerobot_factorworld.protocol.sampling import sample_configs
     from lerobot_factorworld.protocol.sidecar import SIDECAR
-    from lerobot_factorworld.study.plan import make_plan
-    from lerobot_factorworld.study.steps import read_result
+    from lerobot_factorworld.study.plan.grid import make_plan
+    from lerobot_factorworld.study.run.steps import read_result
 
     cfg, _ = toy
     collect = next(s for s in make_plan(cfg).of_kind("collect") if s.inputs["n_envs"] == 2)
@@ -575,9 +575,9 @@ def test_a_plan_on_a_local_ray_instance_gives_the_same_results(toy, tmp_path):
     pytest.importorskip("ray")
     import csv
 
-    from lerobot_factorworld.study.plan import make_plan
+    from lerobot_factorworld.study.plan.grid import make_plan
+    from lerobot_factorworld.study.run.steps import read_result
     from lerobot_factorworld.study.runner import run_study
-    from lerobot_factorworld.study.steps import read_result
 
     cfg, local = toy
     ray_cfg, _ = _toy_config(tmp_path / "toy", executor="ray", n_train_envs="[1]", factors="[light]")
@@ -608,9 +608,9 @@ def test_a_study_reuses_another_studys_finished_steps_by_key(toy, tmp_path):
     regenerates where they do not exist."""
     import csv
 
-    from lerobot_factorworld.study.cost import describe
-    from lerobot_factorworld.study.plan import make_plan
-    from lerobot_factorworld.study.report import regenerate_report
+    from lerobot_factorworld.study.plan.cost import describe
+    from lerobot_factorworld.study.plan.grid import make_plan
+    from lerobot_factorworld.study.report.write import regenerate_report
     from lerobot_factorworld.study.runner import run_study
 
     cfg, first = toy
@@ -654,7 +654,7 @@ def test_a_batched_evaluation_is_its_own_step_and_runs_vectorised(toy, tmp_path)
     both evaluations run anew (a batch changes the actions' last bits, so it is in their key) in one batch of 2."""
     import csv
 
-    from lerobot_factorworld.study.plan import make_plan
+    from lerobot_factorworld.study.plan.grid import make_plan
     from lerobot_factorworld.study.runner import run_study
 
     cfg, _ = toy
@@ -683,9 +683,9 @@ def test_a_study_collects_and_evaluates_at_the_quality_it_names(toy, tmp_path, m
     lod, every evaluation renders its scenes at lod, and the report says so; the toy's default keys hold none."""
     from lerobot_factorworld.envs import runtime
     from lerobot_factorworld.study import runner
-    from lerobot_factorworld.study.executors import InlineExecutor
-    from lerobot_factorworld.study.plan import make_plan
-    from lerobot_factorworld.study.steps import read_result
+    from lerobot_factorworld.study.plan.grid import make_plan
+    from lerobot_factorworld.study.run.executors import InlineExecutor
+    from lerobot_factorworld.study.run.steps import read_result
 
     cfg, _ = toy
     assert all("quality" not in s.inputs for s in make_plan(cfg).of_kind("collect"))
@@ -738,7 +738,7 @@ def test_cli_dry_run_and_one_line_errors(tmp_path, run_main):
 
 def test_a_method_may_be_any_registered_lerobot_policy_type():
     """LeRobot's own policy types (act, diffusion, ...) train in a study like bc and rt1; a typo names them all."""
-    from lerobot_factorworld.study.config import MethodConfig, check_policy
+    from lerobot_factorworld.study.plan.config import MethodConfig, check_policy
 
     check_policy(MethodConfig(name="act", policy={"type": "act", "chunk_size": 10, "n_action_steps": 10}))
     with pytest.raises(ValueError, match="unknown policy type 'actt'; valid types: act, bc, diffusion"):
@@ -753,14 +753,14 @@ FINDINGS = [name for name in STUDY_CONFIGS if name.startswith("findings/")]
 
 def _config(name: str):
     from lerobot_factorworld.core.settings import parse_config
-    from lerobot_factorworld.study.config import StudyConfig
+    from lerobot_factorworld.study.plan.config import StudyConfig
 
     return parse_config(StudyConfig, [f"--config_path={ROOT / 'configs' / 'study' / name}"], "study")
 
 
 @pytest.mark.parametrize("name", STUDY_CONFIGS)
 def test_study_configs_parse_and_plan(name):
-    from lerobot_factorworld.study.plan import make_plan
+    from lerobot_factorworld.study.plan.grid import make_plan
 
     assert make_plan(_config(name)).counts()["eval"] > 0
 
@@ -821,9 +821,9 @@ def test_run_findings_reuses_finished_folders_and_goes_on_past_a_failed_study(tm
 def test_study_datasets_store_lossless_frames_by_default():
     """Training frames are PNG (lossless) unless a study asks for video: AV1's 4:2:0 chroma would smear a
     13-pixel object's colour in training while evaluation sees raw renders."""
-    from lerobot_factorworld.study.config import StudyConfig
-    from lerobot_factorworld.study.plan import make_plan
-    from lerobot_factorworld.study.steps import collect_config
+    from lerobot_factorworld.study.plan.config import StudyConfig
+    from lerobot_factorworld.study.plan.grid import make_plan
+    from lerobot_factorworld.study.run.steps import collect_config
 
     for cfg in (StudyConfig(), *(_config(name) for name in STUDY_CONFIGS)):
         for step in make_plan(cfg).of_kind("collect"):
@@ -833,8 +833,8 @@ def test_study_datasets_store_lossless_frames_by_default():
 def test_paper_config_is_the_papers_grid():
     from lerobot_factorworld.core.settings import parse_config
     from lerobot_factorworld.factors.registry import PAPER_STUDY_FACTORS
-    from lerobot_factorworld.study.config import StudyConfig
-    from lerobot_factorworld.study.plan import make_plan, radius_of
+    from lerobot_factorworld.study.plan.config import StudyConfig
+    from lerobot_factorworld.study.plan.grid import make_plan, radius_of
 
     cfg = parse_config(StudyConfig, [f"--config_path={ROOT / 'configs' / 'study' / 'paper.yaml'}"], "study")
     assert cfg.tasks == ["pick-place", "bin-picking", "door-open"] and cfg.n_train_envs == [5, 20, 50, 100]

@@ -11,11 +11,11 @@ from pathlib import Path
 
 import pytest
 
-from lerobot_factorworld.study.config import StudyConfig
-from lerobot_factorworld.study.cost import describe, fit_cost_model
-from lerobot_factorworld.study.eval_env import env_config
-from lerobot_factorworld.study.inputs import CollectInputs
-from lerobot_factorworld.study.plan import make_plan
+from lerobot_factorworld.study.plan.config import StudyConfig
+from lerobot_factorworld.study.plan.cost import describe, fit_cost_model
+from lerobot_factorworld.study.plan.grid import make_plan
+from lerobot_factorworld.study.run.eval_env import env_config
+from lerobot_factorworld.study.run.inputs import CollectInputs
 
 ROOT = Path(__file__).resolve().parents[1]
 BC = {"name": "bc", "policy": {"type": "bc"}}
@@ -32,7 +32,7 @@ def _cfg(**overrides) -> StudyConfig:
         "eval": {"n_test_envs": 2, "episodes": 2},
     }
     settings.update(overrides)
-    from lerobot_factorworld.study.config import CollectSettings, EvalSettings, TrainSettings
+    from lerobot_factorworld.study.plan.config import CollectSettings, EvalSettings, TrainSettings
 
     for name, cls in (("collect", CollectSettings), ("train", TrainSettings), ("eval", EvalSettings)):
         if isinstance(settings.get(name), dict):
@@ -53,7 +53,7 @@ def _eval_keys(cfg: StudyConfig) -> dict[tuple, str]:
 
 def test_collect_key_holds_the_data_version_and_package_versions_not_the_factor_order(monkeypatch):
     from lerobot_factorworld.datasets.version import DATA_VERSION
-    from lerobot_factorworld.study import plan as plan_module
+    from lerobot_factorworld.study.plan import grid as plan_module
 
     cfg = _cfg()
     collect = make_plan(cfg).of_kind("collect")[0]
@@ -155,7 +155,7 @@ def test_relative_weights_path_is_resolved_and_keyed_by_its_content(tmp_path, mo
 
 def test_missing_weights_file_is_refused_before_any_step_runs(tmp_path, monkeypatch, capsys):
     from lerobot_factorworld.cli import main
-    from lerobot_factorworld.study.cost import describe
+    from lerobot_factorworld.study.plan.cost import describe
     from lerobot_factorworld.study.runner import run_study
 
     monkeypatch.chdir(tmp_path)
@@ -189,7 +189,7 @@ def test_missing_weights_file_is_refused_before_any_step_runs(tmp_path, monkeypa
 
 
 def test_ray_requests_are_checked_against_the_cluster():
-    from lerobot_factorworld.study.executors import check_feasible, local_cpus, step_resources
+    from lerobot_factorworld.study.run.executors import check_feasible, local_cpus, step_resources
 
     cfg = _cfg(
         train={"threads": 4, "device": "cuda"},
@@ -228,7 +228,7 @@ def test_duplicate_method_names_and_duplicate_policy_settings_are_refused():
 
 
 def test_results_name_paths_relative_to_the_study_folder_and_a_moved_study_still_reads_them(tmp_path, monkeypatch):
-    from lerobot_factorworld.study import steps
+    from lerobot_factorworld.study.run import steps
 
     def fake_collect(step, folder, deps):
         (folder / "data").mkdir()
@@ -255,7 +255,7 @@ def test_results_name_paths_relative_to_the_study_folder_and_a_moved_study_still
 
 def test_pick_language_conditions_and_n_objects_in_a_study():
     from lerobot_factorworld.pick.family import PICK_FAMILY
-    from lerobot_factorworld.study.steps import collect_config
+    from lerobot_factorworld.study.run.steps import collect_config
 
     factors = ["light", "table_texture", "held_out_phrasings", "held_out_objects"]
     cfg = _cfg(tasks=["pick"], n_train_envs=[2], factors=factors, pairs=["all"], collect={"demos": 2, "n_objects": 3})
@@ -291,7 +291,7 @@ def test_pick_study_config_plans_the_real_robot_conditions():
 
 
 def test_frozen_resnet_encoders_cost_more_than_the_conv_encoder(tmp_path, monkeypatch):
-    from lerobot_factorworld.study.cost import estimate
+    from lerobot_factorworld.study.plan.cost import estimate
 
     monkeypatch.chdir(tmp_path)
     (tmp_path / "w.pt").write_bytes(b"w")
@@ -307,11 +307,11 @@ def test_frozen_resnet_encoders_cost_more_than_the_conv_encoder(tmp_path, monkey
 
 
 def test_reused_steps_are_linked_by_key_and_a_dangling_link_is_relinked_or_dropped(tmp_path):
-    """study/reuse.py without running a step: a finished step (its result.json) of another folder is linked
+    """study/run/reuse.py without running a step: a finished step (its result.json) of another folder is linked
     (relatively: both folders may move together); an unfinished one is not; when that folder moves alone, the
     dangling link is replaced from the new place, or removed so that the step runs here."""
-    from lerobot_factorworld.study.reuse import link_reused_steps, reusable_steps
-    from lerobot_factorworld.study.steps import is_done
+    from lerobot_factorworld.study.run.reuse import link_reused_steps, reusable_steps
+    from lerobot_factorworld.study.run.steps import is_done
 
     other, here = tmp_path / "other", tmp_path / "here"
     cfg = _cfg(out_dir=str(here))
@@ -342,7 +342,7 @@ def test_a_per_task_step_limit_changes_only_that_tasks_evaluations():
     """``eval.max_episode_steps_per_task``: bin-picking at 500 steps beside door-open at 200 keeps door-open's
     evaluation keys (a finished study's steps stay reusable) and changes bin-picking's; a task the study leaves
     out is ignored (``--tasks`` narrows a config), an unknown one refused."""
-    from lerobot_factorworld.study.markdown import _step_limits
+    from lerobot_factorworld.study.report.markdown import _step_limits
 
     tasks = ["door-open", "bin-picking"]
     common = _cfg(tasks=tasks, n_train_envs=[1], eval={"n_test_envs": 2, "episodes": 2, "max_episode_steps": 200})

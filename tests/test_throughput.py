@@ -17,10 +17,10 @@ from pathlib import Path
 import pytest
 
 from lerobot_factorworld.core.timing import Timings
-from lerobot_factorworld.study.config import StudyConfig
-from lerobot_factorworld.study.executors import can_fork, lend_idle_workers, task_units
-from lerobot_factorworld.study.plan import make_plan
-from lerobot_factorworld.study.steps import as_lerobot_process, loader_args, stores_video
+from lerobot_factorworld.study.plan.config import StudyConfig
+from lerobot_factorworld.study.plan.grid import make_plan
+from lerobot_factorworld.study.run.executors import can_fork, lend_idle_workers, task_units
+from lerobot_factorworld.study.run.steps import as_lerobot_process, loader_args, stores_video
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -119,8 +119,8 @@ def test_a_process_with_another_thread_is_not_forked():
 
 
 def test_profile_and_cost_fit_read_the_steps_timings(tmp_path, monkeypatch):
-    from lerobot_factorworld.study import cost, profile
-    from lerobot_factorworld.study.steps import RESULT_FILE
+    from lerobot_factorworld.study.plan import cost, profile
+    from lerobot_factorworld.study.run.steps import RESULT_FILE
 
     cfg = _cfg(tmp_path)
     plan = make_plan(cfg)
@@ -257,7 +257,7 @@ def test_a_grouped_study_in_a_process_with_threads_forks_preloaded_workers(tmp_p
     worker would import for 8-20 s). The per_step execution keeps fresh spawned workers."""
     import threading
 
-    from lerobot_factorworld.study.executors import LocalExecutor
+    from lerobot_factorworld.study.run.executors import LocalExecutor
 
     stop = threading.Event()
     thread = threading.Thread(target=stop.wait)

@@ -1,5 +1,5 @@
 """Where a piece of work spends its time: named wall-clock totals (seconds), for the study's per-step
-``timings`` (``study/profile.py`` summarises them). Measuring never changes what is computed: a timed
+``timings`` (``study/plan/profile.py`` summarises them). Measuring never changes what is computed: a timed
 call returns what the untimed one returns.
 """
 

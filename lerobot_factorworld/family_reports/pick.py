@@ -17,13 +17,13 @@ from typing import Any
 from ..core.io import atomic_write_text, read_table
 from ..pick.records import BY, breakdown
 from ..protocol.conditions import TRAIN_SUITE
-from ..study.aggregate import main_grid, pooled_rho_interval, pooled_success
-from ..study.config import StudyConfig
-from ..study.family_report import FamilyReport
-from ..study.markdown import FAMILY_DETAILS, FAMILY_RESULTS, ci
 from ..study.metrics import spearman
 from ..study.paper import PAPER_REAL_ROBOT
-from ..study.results import Evaluation, csv_text
+from ..study.plan.config import StudyConfig
+from ..study.report.family_report import FamilyReport
+from ..study.report.markdown import FAMILY_DETAILS, FAMILY_RESULTS, ci
+from ..study.results.aggregate import main_grid, pooled_rho_interval, pooled_success
+from ..study.results.rows import Evaluation, csv_text
 from ..tasks import get_task
 
 FAMILY = "pick"  # the family's name and the key of its episode records in an evaluation's result

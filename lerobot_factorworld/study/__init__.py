@@ -1,18 +1,13 @@
-"""The generalization-gap study (``factorworld study``), one module per job or artefact:
+"""The generalization-gap study (``factorworld study``), as its pipeline, bottom-up (each subpackage imports only
+from those listed before it; the layer contract in pyproject.toml checks it):
 
-- ``config``: the study's settings (a draccus dataclass, checked before any work starts);
-- ``inputs``: the typed inputs of collect, train and eval steps (what a step's key hashes);
-- ``plan``: the grid as content-hashed steps;
-- ``cost``: the ``--dry-run`` text and its rough cost model;
-- ``steps``: running one step (collect, ``lerobot-train``, LeRobot's evaluation), cached by its key;
-- ``executors``: a local process pool or Ray, which only run the steps they are handed;
-- ``metrics``: pure functions (Wilson and Newcombe intervals, pair metric, Spearman);
-- ``paper``: the paper's reference numbers (factor ordering, real-robot success rates);
-- ``results``: ``results.csv``, one row per finished evaluation;
-- ``aggregate``: one selector per table and figure, over the rows of ``results.csv``;
-- ``plots``: the PNG plots; ``markdown``: ``report.md``;
-- ``report``: writes all of them (and the task families' sections) from the finished steps;
-- ``runner``: plan -> run what is not cached -> report.
+- ``metrics``, ``paper``: pure statistics (Wilson and Newcombe intervals, the pair metric, Spearman) and the
+  paper's reference numbers;
+- ``run``: one step (collect, ``lerobot-train``, LeRobot's evaluation), cached by its key, and the executors;
+- ``plan``: the study's config, its grid as steps, the ``--dry-run`` cost and power, stale steps;
+- ``results``: ``results.csv``, ``episodes.parquet``, the aggregations and the claims' verdicts;
+- ``report``: ``report.md``, ``report.html``, the figures and the published tables;
+- ``runner``: plan -> run what is not cached -> report (:func:`runner.run_study`, :func:`runner.inspect_study`).
 
 The evaluation protocol (conditions, coverage, the training condition read from a dataset) is
 :mod:`lerobot_factorworld.protocol`.

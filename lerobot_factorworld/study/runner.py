@@ -22,17 +22,17 @@ from tqdm import tqdm
 
 from ..core.io import atomic_write_json
 from ..datasets.hub import check_hub_token
-from .checkpoint import check_checkpoints, fetch_checkpoints
-from .config import RUN_CONFIG_FILE, StudyConfig, write_run_config
-from .cost import describe, fit_cost_model
-from .episodes import push_results
-from .executors import make_executor, task_units
-from .plan import Plan, make_plan
-from .profile import profile_text, record_run
-from .report import write_report
-from .reuse import link_reused_steps
-from .stale import check_not_stale, rerun_stale, stale_steps, warn_stale
-from .steps import KINDS, Step, is_done
+from .plan.config import RUN_CONFIG_FILE, StudyConfig, write_run_config
+from .plan.cost import describe, fit_cost_model
+from .plan.grid import Plan, make_plan
+from .plan.profile import profile_text, record_run
+from .plan.stale import check_not_stale, rerun_stale, stale_steps, warn_stale
+from .report.write import write_report
+from .results.episodes import push_results
+from .run.checkpoint import check_checkpoints, fetch_checkpoints
+from .run.executors import make_executor, task_units
+from .run.reuse import link_reused_steps
+from .run.steps import KINDS, Step, is_done
 
 LOCK_FILE = ".lock"
 PLAN_FILE = "plan.json"

@@ -1,0 +1,717 @@
+"""``factorworld study --config configs/study/<name>.yaml``: the settings of a generalization-gap study.
+
+A study is the grid methods x tasks x N x seeds, each cell trained on its own dataset and evaluated on
+the conditions: ``train``, every factor in ``factors``, the ``pairs``, and the radius sweep (camera and
+table position sampled, for training and test alike, from radii 0.025 / 0.05 / 0.075 m). Everything is
+checked here, before any work starts.
+"""
+
+from __future__ import annotations
+
+import itertools
+import json
+import logging
+import os
+import re
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import draccus
+
+from ...core.checks import check_at_least, check_choice
+from ...core.io import atomic_write_json
+from ...datasets.hub import check_hub_repo_id
+from ...envs.lerobot_obs import FACTORWORLD_OBS, LEROBOT_METAWORLD_OBS, check_lerobot_task, check_obs_mode
+from ...experts import DEFAULT_ACTION_NOISE
+from ...factors.registry import PAPER_STUDY_FACTORS, WIDTHS, check_task_support, get_factor
+from ...families import all_families, condition_family, family_of
+from ...protocol.conditions import PAIR_SEPARATOR, condition_name, parse_shift
+from ...protocol.sampling import DEFAULT_RGB_FRACTION, SamplingOptions
+from ...scene.build import DEFAULT_QUALITY, QUALITIES
+from ...scene.cameras import DEFAULT_CAMERAS_SETTING, DEFAULT_IMAGE_SIZE
+from ...tasks import get_task
+from ..run.checkpoint import checkpoint_setting
+from ..run.inputs import EPOCHS_OVER, OWN_FRAMES
+from ..run.reuse import check_reuse_from
+from ..run.steps import EXECUTIONS  # how steps run, never what they compute
+from .claim_config import ClaimConfig
+
+EXECUTORS = ("local", "ray")
+ALL_PAIRS = "all"
+RADIUS_FACTORS = ("camera_pos", "table_pos")
+RADII_M = {"narrow": 0.025, "medium": 0.05, "wide": 0.075}  # the paper's radii (appendix table)
+PATH_SUFFIXES = ("_path", "_root")  # settings named like this are local paths: resolved when the config is read
+WEIGHTS_SUFFIX = "weights_path"  # ... and these name weight files that must exist before a study starts
+DEVICE_PATTERN = re.compile(r"cpu|mps|cuda(:\d+)?")
+
+
+def is_path_setting(name: str) -> bool:
+    """A policy setting or ``lerobot-train`` flag that names a local file or folder."""
+    return name.endswith(PATH_SUFFIXES)
+
+
+def absolute_path(value: str) -> str:
+    """``value`` made absolute against the directory the command runs from (steps run elsewhere)."""
+    return os.path.abspath(os.path.expanduser(value))
+
+
+def map_policy_paths(policy: dict[str, Any], convert: Callable[[str], str]) -> dict[str, Any]:
+    """The policy settings with ``convert`` applied to every path-like value (``*_path``, ``*_root``, nested too)."""
+    out: dict[str, Any] = {}
+    for name, value in policy.items():
+        if isinstance(value, dict):
+            out[name] = map_policy_paths(value, convert)
+        elif isinstance(value, str) and value and is_path_setting(name):
+            out[name] = convert(value)
+        else:
+            out[name] = value
+    return out
+
+
+def resolve_policy_paths(policy: dict[str, Any]) -> dict[str, Any]:
+    """The policy settings with every path-like value made absolute."""
+    return map_policy_paths(policy, absolute_path)
+
+
+def split_flag(arg: str) -> tuple[str, str] | None:
+    """``--a.b_path=x`` -> (``a.b_path``, ``x``); ``None`` for anything that is not ``--name=value``."""
+    if not arg.startswith("--") or "=" not in arg:
+        return None
+    name, _, value = arg[2:].partition("=")
+    return name, value
+
+
+def map_arg_paths(args: list[str], convert: Callable[[str], str]) -> list[str]:
+    """``lerobot-train`` flags with ``convert`` applied to path-like values (``--x.y_path=...``, ``--x.y_root=...``)."""
+    out = []
+    for arg in args:
+        flag = split_flag(arg)
+        if flag and flag[1] and is_path_setting(flag[0]):
+            arg = f"--{flag[0]}={convert(flag[1])}"
+        out.append(arg)
+    return out
+
+
+def resolve_arg_paths(args: list[str]) -> list[str]:
+    """``lerobot-train`` flags with path-like values made absolute."""
+    return map_arg_paths(args, absolute_path)
+
+
+def policy_paths(policy: dict[str, Any], prefix: str = "") -> dict[str, str]:
+    """Dotted setting name -> path, for every path-like policy setting (nested too)."""
+    out: dict[str, str] = {}
+    for name, value in policy.items():
+        if isinstance(value, dict):
+            out.update(policy_paths(value, f"{prefix}{name}."))
+        elif isinstance(value, str) and value and is_path_setting(name):
+            out[prefix + name] = value
+    return out
+
+
+def check_device(setting: str, device: str) -> None:
+    if not DEVICE_PATTERN.fullmatch(str(device)):
+        raise ValueError(f"unknown {setting} {device!r}; valid: cpu, cuda, cuda:<index>, mps")
+
+
+@dataclass
+class MethodConfig:
+    """A method: a LeRobot policy type and its overrides, trained on every dataset of the study, e.g.
+    ``{name: bc_shift, policy: {type: bc, augmentation: shift}}``; or an existing checkpoint, evaluated as it
+    is, e.g. ``{name: my_policy, checkpoint: path/to/pretrained_model}`` (``checkpoint.py``).
+
+    Attributes:
+        name: Name in the results (``method`` column), e.g. ``bc_shift``.
+        policy: ``--policy.<key>=<value>`` settings for ``lerobot-train``; ``type`` is required (unless
+            ``checkpoint`` is given, which takes none).
+        checkpoint: A LeRobot ``pretrained_model`` folder (or a Hub model id, fetched only when the Hub can be
+            reached) to evaluate instead of training one: no collection and no training for this method. It
+            is evaluated once per task, N and widths, on the environments of the first of ``seeds`` (it has
+            no training seed), in the same cells and conditions as the trained methods.
+        obs: The observation the checkpoint was made for: ``factorworld`` (``collect.cameras`` at
+            ``collect.image_size``, 8-number state) or ``lerobot_metaworld`` (LeRobot's metaworld env:
+            docs/lerobot_metaworld.md). Trained methods always observe as their datasets do (``factorworld``).
+        extra_tasks: Out-of-domain data (the paper's section 5.4): a trained method's data for a task is that
+            task's dataset plus the dataset of each of these other tasks in the same cell (same N, seed and
+            widths; a listed task equal to the cell's own is skipped, so ``[pick-place, door-open]`` gives each
+            of the two tasks the other's demos). In-task demos and gradient steps stay those of the same method
+            without extra tasks (``train.epochs`` counts the task's own frames), so only the data's composition
+            changes. Meta-World tasks only (the datasets must share their features).
+        extra_demos: Demos of each extra task (``None``: ``collect.demos`` for it, so the datasets are the ones
+            those tasks' own cells use, collected once).
+        epochs_over: With ``extra_tasks``, what ``train.epochs`` counts: ``task`` (the default) the task's own
+            frames, so the gradient steps are those without extra tasks and each own frame is seen fewer times;
+            ``merged`` every frame of the merged data, so each own frame is seen as often as without extra tasks,
+            in proportionally more gradient steps (F8 in docs/findings.md: at equal steps pick-place's own data got
+            13 of the recipe's 60 passes).
+    """
+
+    name: str = "rt1_small"
+    policy: dict[str, Any] = field(default_factory=dict)
+    checkpoint: str | None = None
+    obs: str = FACTORWORLD_OBS
+    extra_tasks: list[str] = field(default_factory=list)
+    extra_demos: int | None = None
+    epochs_over: str = OWN_FRAMES
+
+    def __post_init__(self) -> None:
+        check_obs_mode(self.obs)
+        if self.epochs_over not in EPOCHS_OVER:
+            raise ValueError(
+                f"method {self.name!r}: unknown epochs_over {self.epochs_over!r}; valid: {', '.join(EPOCHS_OVER)}"
+            )
+        if self.epochs_over != OWN_FRAMES and not self.extra_tasks:
+            raise ValueError(
+                f"method {self.name!r}: epochs_over={self.epochs_over} counts epochs over merged data: it needs extra_tasks"
+            )
+        if self.checkpoint is not None and (self.extra_tasks or self.extra_demos is not None):
+            raise ValueError(
+                f"method {self.name!r}: extra_tasks / extra_demos add training data; a given checkpoint is not trained"
+            )
+        for task in self.extra_tasks:
+            check_extra_task(self.name, task)
+        if self.extra_demos is not None and self.extra_demos < 1:
+            raise ValueError(f"method {self.name!r}: extra_demos must be at least 1, got {self.extra_demos}")
+        if self.checkpoint is not None:
+            if self.policy:
+                raise ValueError(
+                    f"method {self.name!r} names a checkpoint and policy settings {self.policy}: a given checkpoint "
+                    "is evaluated as it is (its settings are in its config.json); drop one"
+                )
+            self.checkpoint = checkpoint_setting(self.checkpoint)
+            return
+        if "type" not in self.policy:
+            raise ValueError(
+                f"method {self.name!r} needs policy.type (a LeRobot policy type such as bc, rt1, act) or a "
+                "checkpoint (an existing pretrained_model folder)"
+            )
+        if self.obs != FACTORWORLD_OBS:
+            raise ValueError(
+                f"method {self.name!r}: obs={self.obs} applies to a given checkpoint only (a trained method observes "
+                f"as its dataset does, obs={FACTORWORLD_OBS})"
+            )
+        # lerobot-train runs in the step's folder: a relative weights path must not depend on that
+        self.policy = resolve_policy_paths(self.policy)
+
+    def extra_tasks_for(self, task: str) -> list[str]:
+        """The other tasks whose demos join ``task``'s training data (``extra_tasks`` without ``task``)."""
+        return [t for t in self.extra_tasks if t != task]
+
+    @property
+    def trains(self) -> bool:
+        """The study trains this method (it names policy settings, not a checkpoint)."""
+        return self.checkpoint is None
+
+
+def check_extra_task(method: str, task: str, role: str = "extra task") -> None:
+    """An out-of-domain task (or a task that gets one: ``role``) exists and is a plain Meta-World task: their
+    datasets are merged, which needs the same features."""
+    try:
+        get_task(task)
+    except ValueError as err:  # "unknown task 'x'; valid tasks: ..."
+        raise ValueError(f"method {method!r}: extra_tasks: {err}") from None
+    if family_of(task).name:  # "" for plain Meta-World tasks
+        raise ValueError(
+            f"method {method!r}: {role} {task!r} is of the {family_of(task).name} family, whose datasets have other "
+            "features than Meta-World tasks'; extra_tasks joins Meta-World tasks only"
+        )
+
+
+def check_policy(method: MethodConfig) -> None:
+    """The method's policy type exists and accepts its overrides (as ``lerobot-train`` will parse them)."""
+    # Deliberately here: importing LeRobot (and the policy configs that register bc and rt1) costs seconds,
+    # and only a study's validation needs it, not every importer of this module.
+    import lerobot.policies  # noqa: F401, PLC0415 - registers LeRobot's own policy types (act, diffusion, ...)
+    from lerobot.configs.policies import PreTrainedConfig  # noqa: PLC0415
+
+    from ...policies.bc import configuration_bc  # noqa: F401, PLC0415 - registers bc
+    from ...policies.rt1 import configuration_rt1  # noqa: F401, PLC0415 - registers rt1
+
+    kind = method.policy["type"]
+    if kind not in PreTrainedConfig.get_known_choices():
+        known = ", ".join(sorted(PreTrainedConfig.get_known_choices()))
+        raise ValueError(f"method {method.name!r}: unknown policy type {kind!r}; valid types: {known}")
+    overrides = {k: v for k, v in method.policy.items() if k != "type"}
+    quiet = logging.getLogger()
+    level, quiet.level = quiet.level, logging.ERROR  # constructing a config logs device warnings
+    try:
+        draccus.decode(PreTrainedConfig.get_choice_class(kind), overrides)
+    except Exception as err:  # draccus reports unknown fields and bad values; the innermost cause says why
+        while err.__cause__ is not None:
+            err = err.__cause__
+        raise ValueError(f"method {method.name!r}: bad policy settings {overrides}: {err}") from None
+    finally:
+        quiet.level = level
+
+
+def per_task_setting(setting: str, values: dict[str, Any]) -> dict[str, Any]:
+    """A per-task override (``{task: value}``) keyed by task names, the Meta-World ``-v3`` spelling folded.
+    A task the study leaves out is fine (``--tasks`` may narrow a config); an unknown one is refused,
+    naming the valid tasks, before any work starts."""
+    out = {}
+    for task, value in values.items():
+        try:
+            out[get_task(str(task)).name] = value
+        except ValueError as err:  # "unknown task 'x'; valid tasks: ..."
+            raise ValueError(f"{setting}: {err}") from None
+    return out
+
+
+@dataclass
+class CollectSettings:
+    """Scripted demonstrations per (task, N, seed) dataset (``factorworld collect``).
+
+    Attributes:
+        demos: Successful demos per dataset (spread evenly over the N environments).
+        demos_per_task: Per-task override of ``demos`` (the paper: pick-place 2000, others 1000).
+        cameras: Cameras stored and given to the policy.
+        image_size: Square image side in pixels (the paper: 84).
+        use_videos: Store frames as MP4 (smaller) or PNG in parquet (faster to train from).
+        action_noise: Std of the expert's Gaussian action noise.
+        max_episode_steps: Demo step limit (``None``: the task's horizon).
+        object_pos_width: Range of the per-episode object start (``narrow`` / ``medium``), for
+            collection and evaluation alike.
+        n_distractors: Distractor objects per environment.
+        rgb_fraction: Share of texture draws (object, table, floor, distractors) that are a flat RGB colour
+            instead of an image, for collection and evaluation alike (``None``: the sampling default,
+            ``SamplingOptions.rgb_fraction``, the paper's images and colours as docs/factors.md reads it).
+        n_objects: Objects on the table per scene, for the task families that read it (their
+            ``sampling_options``; ``None``: the sampling default); refused for other tasks.
+        quality: Render quality of the demonstrations and so of every evaluation on their environments
+            (``fast``, ``lod``: simplified robot meshes, about 2x faster frames, slightly other pixels; ``full``:
+            Meta-World's shadows, about 7x slower; docs/factors.md). In the collection's key when not ``fast``.
+            The cost model assumes ``fast``.
+        workers: Worker processes of one collection.
+    """
+
+    demos: int = 50
+    demos_per_task: dict[str, int] = field(default_factory=dict)
+    cameras: str = DEFAULT_CAMERAS_SETTING
+    image_size: int = DEFAULT_IMAGE_SIZE
+    use_videos: bool = False
+    action_noise: float = DEFAULT_ACTION_NOISE
+    max_episode_steps: int | None = None
+    object_pos_width: str = "narrow"
+    n_distractors: int = 1
+    rgb_fraction: float | None = None
+    n_objects: int | None = None
+    quality: str = DEFAULT_QUALITY
+    workers: int = 1
+
+    def __post_init__(self) -> None:
+        self.demos_per_task = per_task_setting("collect.demos_per_task", self.demos_per_task)
+        check_choice("collect.quality", self.quality, QUALITIES)
+        if self.rgb_fraction is not None:
+            try:
+                SamplingOptions(rgb_fraction=self.rgb_fraction)
+            except ValueError as err:  # "rgb_fraction must be in [0, 1], got 2.0"
+                raise ValueError(f"collect.{err}") from None
+
+    @property
+    def other_quality(self) -> str | None:
+        """``quality`` where it is not the default (what a collection's key holds), else ``None``."""
+        return None if self.quality == DEFAULT_QUALITY else self.quality
+
+    @property
+    def effective_rgb_fraction(self) -> float:
+        """``rgb_fraction`` as set, or the sampling default."""
+        return DEFAULT_RGB_FRACTION if self.rgb_fraction is None else float(self.rgb_fraction)
+
+    def demos_for(self, task: str) -> int:
+        return int(self.demos_per_task.get(get_task(task).name, self.demos))
+
+    def family_options_for(self, task: str) -> dict[str, Any]:
+        """The sampling options ``task``'s family reads (``SamplingOptions`` fields named in its
+        ``sampling_options``), each as set here or the sampling default; ``{}`` for a plain task."""
+        defaults = SamplingOptions()
+        return {
+            name: getattr(defaults, name) if getattr(self, name) is None else getattr(self, name)
+            for name in family_of(task).sampling_options
+        }
+
+
+@dataclass
+class TrainSettings:
+    """``lerobot-train`` settings shared by every method.
+
+    Attributes:
+        steps: Gradient steps (ignored when ``epochs`` is set).
+        epochs: Passes over the dataset's frames (the paper: 100); steps = ceil(epochs * frames / batch).
+        batch_size: Batch size.
+        threads: Torch CPU threads per training run (fixed so that results do not depend on the machine).
+        device: ``cpu`` or ``cuda``.
+        extra_args: More ``lerobot-train`` flags, e.g. ``["--optimizer.lr=3e-4"]``; values of flags named
+            ``*_path`` / ``*_root`` are made absolute (training runs in the step's folder).
+    """
+
+    steps: int = 1000
+    epochs: float | None = None
+    batch_size: int = 32
+    threads: int = 1
+    device: str = "cpu"
+    extra_args: list[str] = field(default_factory=list)
+
+    def __post_init__(self) -> None:
+        self.extra_args = resolve_arg_paths(list(self.extra_args))
+
+
+@dataclass
+class EvalSettings:
+    """Evaluation of every checkpoint on every condition (LeRobot's ``eval_policy_all``).
+
+    Attributes:
+        n_test_envs: Test environments per shifted condition (the paper: 100); a multiple of every N.
+        episodes: Episodes per condition; a multiple of every N and of ``n_test_envs``.
+        start_seed: Episode ``i`` is reset with ``start_seed + i`` in every condition (paired).
+        max_episode_steps: Step limit of an episode (``None``: the task's horizon).
+        max_episode_steps_per_task: Per-task override of ``max_episode_steps`` (e.g. ``{bin-picking: 500}``:
+            bin-picking's policies finish later than the other tasks', docs/findings.md); the other tasks'
+            evaluations, and their keys, stay as they are.
+        device: Where the policy runs during evaluation (``cpu``, ``cuda``, ``cuda:<index>``, ``mps``);
+            in the step's key (GPU kernels need not give the CPU's actions bit for bit).
+        batch_size: Vectorised environments per evaluation. In the key when above 1 (a batch changes the
+            actions' last bits, though not the quick study's successes, and is slower on CPU: docs/study.md,
+            Throughput); 1 (one at a time) keeps every key it always had.
+        threads: Torch CPU threads per evaluation (not in the key).
+        record_episodes: Episodes per condition and checkpoint whose frames are kept as videos (the first ones:
+            episode i of every condition starts the object at the same place), for report.html's paired
+            viewer; 0: none. Not in the key (frames change no result): a step cached without videos keeps none.
+    """
+
+    n_test_envs: int = 10
+    episodes: int = 20
+    start_seed: int = 1000
+    max_episode_steps: int | None = None
+    max_episode_steps_per_task: dict[str, int] = field(default_factory=dict)
+    device: str = "cpu"
+    batch_size: int = 1
+    threads: int = 1
+    record_episodes: int = 3
+
+    def __post_init__(self) -> None:
+        check_at_least("eval.record_episodes", self.record_episodes, 0)
+        self.max_episode_steps_per_task = per_task_setting(
+            "eval.max_episode_steps_per_task", self.max_episode_steps_per_task
+        )
+
+    def max_steps_for(self, task: str) -> int | None:
+        return self.max_episode_steps_per_task.get(get_task(task).name, self.max_episode_steps)
+
+
+RUN_CONFIG_FILE = "config.json"  # the settings a study ran with, written into its folder by every run
+
+
+def write_run_config(path: str | Path, settings: dict[str, Any]) -> None:
+    """A study's settings as JSON (which YAML reads too) in the one format its folder and docs/results/ use."""
+    atomic_write_json(path, settings, indent=1, sort_keys=True, default=str)
+
+
+@dataclass
+class StudyConfig:
+    """A generalization-gap study.
+
+    Attributes:
+        name: Study name (in results and report).
+        out_dir: Study folder: ``results.csv``, ``report.md``, plots, and the cached steps (``steps/``).
+        tasks: Tasks.
+        n_train_envs: The N values (training environments per dataset).
+        seeds: Seeds; seed ``s`` samples the training and test environments and seeds training.
+        train_factors: Factors varied across the training environments (the paper's seven).
+        factors: Single-factor conditions; also the conditions a task family adds (its ``conditions``,
+            e.g. held-out phrasings and objects), which stand alone: no pairs, no training factor.
+        pairs: Pair conditions: ``[all]`` (every pair of the factors in ``factors``) or a list of ``a+b``.
+        radius_factors: Factors of the radius sweep (``camera_pos``, ``table_pos``).
+        radius_widths: Widths of the sweep: narrow / medium / wide = radius 0.025 / 0.05 / 0.075 m.
+        methods: Methods (policy types and overrides).
+        collect: Demonstration settings.
+        train: Training settings.
+        eval: Evaluation settings.
+        executor: ``local`` (a process pool on this machine) or ``ray``.
+        workers: Steps run at once (local pool size, or concurrent Ray tasks).
+        ray_address: Ray cluster address (``None``: start a local Ray instance).
+        execution: How steps run, never what they compute (same keys, results, checkpoints, datasets):
+            ``grouped`` (default) trains inside the worker process and evaluates all conditions of a
+            checkpoint in one task as soon as it exists (policy loaded once); ``per_step`` runs
+            ``lerobot-train`` as a subprocess and every evaluation as its own task (the earlier way).
+        dry_run: Print the plan (steps per kind, cached, cost estimate) and stop.
+        profile: Run nothing; print where the finished steps' time went (per kind and component).
+        fit_cost: Run nothing; refit the ``--dry-run`` cost model's constants from the finished steps'
+            timings and write them to ``study/cost_model.json``.
+        strict: Refuse to run (one ``error:`` line, before any work) when cached steps of the plan were
+            made by other code than the current (another source hash; see ``core/provenance.py``).
+        rerun_stale: Redo the cached steps made by other code, and every cached step that depends on one
+            (its inputs are remade); their old folders are kept as ``steps/<kind>/<key>.stale-<commit>``.
+        push_to_hub: After the report, push ``episodes.parquet`` and ``results.csv`` with a dataset card to the
+            Hugging Face dataset repo ``hub_repo_id`` (a token is checked before any work; an unreachable Hub
+            is one warning line, and the local results stay complete). Not done while steps have failed.
+        hub_repo_id: ``user/name`` of that dataset repo (required by ``push_to_hub``).
+        reuse_from: Other studies' folders whose finished steps this study uses where the keys (the inputs)
+            are the same, linked into ``steps/`` instead of run again (``study/run/reuse.py``): e.g. F3 and F5
+            reuse F1's seed-0 collections, trainings and single-factor evaluations.
+        claims: The paper's claims this study tests (``claim_config.py``): the report decides each from its
+            intervals (``claims.py``). None: the paper's factor ordering over ``factors``.
+    """
+
+    name: str = "study"
+    out_dir: str = "outputs/study"
+    tasks: list[str] = field(default_factory=lambda: ["door-open"])
+    n_train_envs: list[int] = field(default_factory=lambda: [5])
+    seeds: list[int] = field(default_factory=lambda: [0])
+    train_factors: list[str] = field(default_factory=lambda: list(PAPER_STUDY_FACTORS))
+    factors: list[str] = field(default_factory=lambda: list(PAPER_STUDY_FACTORS))
+    pairs: list[str] = field(default_factory=list)
+    radius_factors: list[str] = field(default_factory=list)
+    radius_widths: list[str] = field(default_factory=lambda: list(WIDTHS))
+    methods: list[MethodConfig] = field(
+        default_factory=lambda: [MethodConfig("rt1_small", {"type": "rt1", "preset": "small"})]
+    )
+    collect: CollectSettings = field(default_factory=CollectSettings)
+    train: TrainSettings = field(default_factory=TrainSettings)
+    eval: EvalSettings = field(default_factory=EvalSettings)
+    executor: str = "local"
+    workers: int = 1
+    ray_address: str | None = None
+    execution: str = "grouped"
+    dry_run: bool = False
+    profile: bool = False
+    fit_cost: bool = False
+    strict: bool = False
+    rerun_stale: bool = False
+    push_to_hub: bool = False
+    hub_repo_id: str | None = None
+    reuse_from: list[str] = field(default_factory=list)
+    claims: list[ClaimConfig] = field(default_factory=list)
+
+    def __post_init__(self) -> None:
+        self.methods = [m if isinstance(m, MethodConfig) else MethodConfig(**m) for m in self.methods]
+        self.claims = [c if isinstance(c, ClaimConfig) else ClaimConfig(**c) for c in self.claims]
+        self.reuse_from = [absolute_path(folder) for folder in self.reuse_from]  # steps run elsewhere
+        self.validate()
+
+    # --- derived -----------------------------------------------------------------------------
+
+    @property
+    def inspects(self) -> bool:
+        """Whether this run only inspects the study (``dry_run``, ``profile``, ``fit_cost``): nothing runs."""
+        return self.dry_run or self.profile or self.fit_cost
+
+    def trained_methods(self) -> list[MethodConfig]:
+        """The methods the study trains (policy settings): they need the collections and trainings."""
+        return [m for m in self.methods if m.trains]
+
+    def given_methods(self) -> list[MethodConfig]:
+        """The methods that name an existing checkpoint: evaluated only."""
+        return [m for m in self.methods if not m.trains]
+
+    def family_conditions(self) -> list[str]:
+        """The task families' own conditions listed in ``factors`` (e.g. held-out phrasings / objects)."""
+        return [f for f in self.factors if condition_family(f) is not None]
+
+    def shifted_factors(self) -> list[str]:
+        """The factors of ``factors`` (without the families' conditions)."""
+        return [f for f in self.factors if condition_family(f) is None]
+
+    def pair_conditions(self) -> list[str]:
+        if [p.strip() for p in self.pairs] == [ALL_PAIRS]:
+            return [condition_name(p) for p in itertools.combinations(self.shifted_factors(), 2)]
+        return [condition_name(parse_shift(p)) for p in self.pairs]
+
+    def conditions(self) -> list[str]:
+        """The shifted conditions of the main grid (singles, then pairs)."""
+        return [*self.factors, *self.pair_conditions()]
+
+    def radius_variants(self) -> list[tuple[str, str]]:
+        """(factor, width) runs of the sweep whose width differs from the factor's default (those
+        reuse the main grid)."""
+        return [
+            (factor, width)
+            for factor in self.radius_factors
+            for width in self.radius_widths
+            if width != get_factor(factor).default_width
+        ]
+
+    # --- checks ------------------------------------------------------------------------------
+
+    def validate(self) -> None:
+        if not self.tasks or not self.n_train_envs or not self.seeds or not self.methods:
+            raise ValueError("a study needs at least one task, one N (n_train_envs), one seed and one method")
+        self._validate_conditions()
+        self._validate_methods()
+        for claim in self.claims:
+            claim.validate([m.name for m in self.methods], self.tasks, self.shifted_factors(), self.pair_conditions())
+        for factor in self.radius_factors:
+            if factor not in RADIUS_FACTORS:
+                raise ValueError(f"the radius sweep applies to {', '.join(RADIUS_FACTORS)}, got {factor!r}")
+            if factor not in self.factors:
+                raise ValueError(
+                    f"radius factor {factor!r} must also be in factors (its narrow radius is the main grid)"
+                )
+        for width in self.radius_widths:
+            if width not in RADII_M:
+                raise ValueError(f"unknown radius width {width!r}; valid: {', '.join(RADII_M)}")
+        get_factor("object_pos").range(self.collect.object_pos_width)  # raises naming the valid widths
+        self._validate_family_options()
+        check_device("train.device", self.train.device)
+        check_device("eval.device", self.eval.device)
+        if self.executor not in EXECUTORS:
+            raise ValueError(f"unknown executor {self.executor!r}; valid executors: {', '.join(EXECUTORS)}")
+        if self.execution not in EXECUTIONS:
+            raise ValueError(f"unknown execution {self.execution!r}; valid: {', '.join(EXECUTIONS)}")
+        if self.workers < 1:
+            raise ValueError(f"workers must be at least 1, got {self.workers}")
+        if self.strict and self.rerun_stale:
+            raise ValueError("strict=true refuses steps made by other code, rerun_stale=true redoes them: set one")
+        self._validate_hub()
+        check_reuse_from(self.reuse_from, self.out_dir)
+        if min(self.n_train_envs) < 1 or len(set(self.n_train_envs)) != len(self.n_train_envs):
+            raise ValueError(f"n_train_envs must be distinct positive numbers, got {self.n_train_envs}")
+        if len(set(self.seeds)) != len(self.seeds):
+            raise ValueError(f"seeds must be distinct, got {self.seeds}")
+        self._validate_episodes()
+        if self.train.epochs is None and self.train.steps < 1:
+            raise ValueError("train.steps must be at least 1 (or set train.epochs)")
+        for method in self.trained_methods():  # last: importing LeRobot's policy configs takes seconds
+            check_policy(method)
+
+    def _validate_hub(self) -> None:
+        """A push names its dataset repo, checked with the other settings (the token is the runner's check)."""
+        if not self.push_to_hub:
+            return
+        if not self.hub_repo_id:
+            raise ValueError(
+                "push_to_hub=true needs --hub_repo_id=<user>/<name>, the Hugging Face dataset repo to push to"
+            )
+        check_hub_repo_id(self.hub_repo_id, "hub_repo_id")
+
+    def _validate_conditions(self) -> None:
+        """Factors apply to every task and are varied in training; a family's conditions need its tasks."""
+        duplicates = sorted({f for f in self.factors if self.factors.count(f) > 1})
+        if duplicates:
+            raise ValueError(f"factors lists {', '.join(duplicates)} more than once")
+        for condition in self.family_conditions():
+            condition_family(condition).check_condition(condition, self.tasks)  # "applies to the x family only"
+        shifted = self.shifted_factors()
+        for task in self.tasks:
+            check_task_support(get_task(task), [*self.train_factors, *shifted, *self.radius_factors])
+        unknown = [f for f in shifted if f not in self.train_factors]
+        if unknown and self.trained_methods():  # a given checkpoint's training is not this study's
+            raise ValueError(
+                f"factor(s) {unknown} are shifted but not varied in training (train_factors: {self.train_factors})"
+            )
+        for pair in self.pairs:
+            named = [part.strip() for part in pair.split(PAIR_SEPARATOR)]
+            if any(condition_family(part) is not None for part in named):
+                own = [c for family in all_families() for c in family.conditions]
+                raise ValueError(f"pair {pair!r}: the conditions {', '.join(own)} stand alone (list them in factors)")
+        for pair in self.pair_conditions():
+            if any(f not in shifted for f in pair.split(PAIR_SEPARATOR)):
+                raise ValueError(f"pair {pair!r} names a factor that is not in factors {shifted}")
+
+    def _validate_methods(self) -> None:
+        """Each method is a valid policy, named once, with settings no other method has (one train key each);
+        a given checkpoint is named once per observation, and LeRobot's observation needs Meta-World tasks.
+        (Their policy settings are checked last, by ``validate``.)"""
+        if any(m.obs == LEROBOT_METAWORLD_OBS for m in self.methods):
+            for task in self.tasks:
+                check_lerobot_task(get_task(task))  # "the pick family has no LeRobot counterpart"
+        names = [m.name for m in self.methods]
+        if len(set(names)) != len(names):
+            twice = sorted({n for n in names if names.count(n) > 1})
+            raise ValueError(f"method names must be distinct: {', '.join(twice)} given more than once")
+        for method in self.trained_methods():
+            for task in self.tasks if method.extra_tasks else ():
+                check_extra_task(method.name, task, "with extra_tasks, task")
+            if method.epochs_over != OWN_FRAMES and self.train.epochs is None:
+                raise ValueError(
+                    f"method {method.name!r}: epochs_over={method.epochs_over} says what train.epochs counts; "
+                    "set train.epochs instead of train.steps"
+                )
+        seen: dict[str, str] = {}
+        for method in self.trained_methods():
+            data = {"extra_tasks": sorted(method.extra_tasks), "extra_demos": method.extra_demos}
+            data["epochs_over"] = method.epochs_over
+            settings = json.dumps({"policy": method.policy, **data}, sort_keys=True)
+            if settings in seen:
+                raise ValueError(
+                    f"methods {seen[settings]!r} and {method.name!r} have the same policy settings {method.policy} "
+                    "and training data: "
+                    "they would train one checkpoint; drop one or change its settings"
+                )
+            seen[settings] = method.name
+        given: dict[tuple[str, str], str] = {}
+        for method in self.given_methods():
+            same = given.setdefault((method.checkpoint, method.obs), method.name)
+            if same != method.name:
+                raise ValueError(
+                    f"methods {same!r} and {method.name!r} name the same checkpoint {method.checkpoint} with the same "
+                    f"obs={method.obs}: they would be one evaluation; drop one"
+                )
+
+    def _validate_family_options(self) -> None:
+        """A family's sampling option (``collect.n_objects``) is set only for tasks of families that read
+        it, and within the range ``SamplingOptions`` accepts."""
+        for family in all_families():
+            for name in family.sampling_options:
+                value = getattr(self.collect, name)
+                if value is None:
+                    continue
+                others = [t for t in self.tasks if name not in family_of(t).sampling_options]
+                if others:
+                    raise ValueError(
+                        f"collect.{name} applies to the {family.name} family only, not to {', '.join(others)}"
+                    )
+                try:
+                    SamplingOptions(**{name: value})
+                except ValueError as err:
+                    raise ValueError(f"collect.{err}") from None
+
+    def missing_weight_files(self) -> list[str]:
+        """``method 'x': <setting> <path>`` for every weights file a method names that does not exist."""
+        missing = []
+        for method in self.methods:
+            for name, path in policy_paths(method.policy).items():
+                if name.endswith(WEIGHTS_SUFFIX) and not Path(path).is_file():
+                    missing.append(f"method {method.name!r}: {name} {path}")
+        for arg in self.train.extra_args:
+            flag = split_flag(arg)
+            if flag and flag[0].endswith(WEIGHTS_SUFFIX) and not os.path.isfile(flag[1]):
+                missing.append(f"train.extra_args: {flag[0]} {flag[1]}")
+        return missing
+
+    def check_weight_files(self) -> None:
+        """Refuse to start when a weights file is missing (weights are never downloaded)."""
+        missing = self.missing_weight_files()
+        if missing:
+            raise FileNotFoundError(
+                f"weights file(s) not found: {'; '.join(missing)} (weights are never downloaded: put the files "
+                "there or fix the paths, relative to the directory you run from)"
+            )
+
+    def _validate_episodes(self) -> None:
+        ev = self.eval
+        if ev.episodes < 1 or ev.n_test_envs < 1 or ev.batch_size < 1:
+            raise ValueError("eval.episodes, eval.n_test_envs and eval.batch_size must be at least 1")
+        for n in self.n_train_envs:
+            if ev.n_test_envs % n:
+                raise ValueError(
+                    f"eval.n_test_envs={ev.n_test_envs} must be a multiple of every N (got N={n}), so that each "
+                    "test environment is paired with the training environment the same episode sees"
+                )
+            if ev.episodes % n:
+                raise ValueError(f"eval.episodes={ev.episodes} must be a multiple of every N (got N={n})")
+        for task, limit in ev.max_episode_steps_per_task.items():  # known tasks (per_task_setting)
+            if int(limit) < 1:
+                raise ValueError(f"eval.max_episode_steps_per_task[{task}] must be at least 1, got {limit}")
+        if ev.max_episode_steps is not None and ev.max_episode_steps < 1:
+            raise ValueError(f"eval.max_episode_steps must be at least 1, got {ev.max_episode_steps}")
+        if ev.episodes % ev.n_test_envs:
+            raise ValueError(
+                f"eval.episodes={ev.episodes} must be a multiple of eval.n_test_envs={ev.n_test_envs}, so that every "
+                "test environment is visited equally"
+            )
+        for task in self.tasks if self.trained_methods() else ():  # demos are collected for training only
+            if self.collect.demos_for(task) < max(self.n_train_envs):
+                raise ValueError(
+                    f"{task}: {self.collect.demos_for(task)} demos cannot cover N={max(self.n_train_envs)} environments"
+                )

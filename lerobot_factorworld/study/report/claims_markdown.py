@@ -1,0 +1,148 @@
+"""The report's claims section and its ordering sentence, both from ``claims.decide``: a verdict printed
+anywhere in a report is the one its intervals give."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+
+from ..metrics import BOOTSTRAP_RESAMPLES
+from ..results.claims import AGREES, CAPPED, DISAGREES, ClaimVerdict, Decided
+
+CLAIMS_HEADING = "## The paper's claims"
+
+
+def _num(value: float) -> str:
+    return "n/a" if not math.isfinite(value) else f"{value:+.3f}"
+
+
+def _interval(d: Decided) -> str:
+    if math.isfinite(d.low) and math.isfinite(d.high):
+        return f"[{d.low:+.3f}, {d.high:+.3f}] at {d.level:.2%}"
+    low, high = d.bootstrap
+    if d.seeds < 2 and math.isfinite(low) and math.isfinite(high):
+        return f"none (one seed; episodes only: [{low:+.3f}, {high:+.3f}] at {d.level:.2%})"
+    return "none"
+
+
+def to_resolve(d: Decided) -> str:
+    """What the comparison's verdict rests on, in words: for an unresolved one, what this design resolves and
+    what would resolve the observed effect."""
+    if d.verdict in (AGREES, DISAGREES):
+        return "resolved"
+    if d.verdict == CAPPED:
+        return f"at most {d.headroom:.3f} the paper's way, below the {d.smallest:.3f} this design resolves"
+    parts = [f"resolves {d.smallest:.3f} (episode noise)" if math.isfinite(d.smallest) else "resolves nothing"]
+    effect = abs(d.point - d.threshold)
+    if not math.isfinite(effect) or effect == 0:
+        parts.append("no effect observed")
+        return "; ".join(parts)
+    parts.append(
+        f"episode noise: {effect:.3f} at ≥{d.episodes_needed:.0f} episodes per cell"
+        if math.isfinite(d.episodes_needed)
+        else f"episode noise: {effect:.3f} at more episodes than any study runs"
+    )
+    if d.seeds < 2:
+        low, high = d.bootstrap
+        episodes_resolve = math.isfinite(low) and (low > d.threshold or high < d.threshold)
+        parts.append(
+            "a second training seed (one seed has no seed-level interval"
+            + ("; its episodes alone resolve it)" if episodes_resolve else ")")
+        )
+    elif math.isfinite(d.seeds_needed):
+        parts.append(f"seed spread: ≈{d.seeds_needed:.0f} seeds")
+    return "; ".join(parts)
+
+
+def claim_cells(v: ClaimVerdict) -> tuple[str, str, str]:
+    """(estimate, interval, what would resolve it) of a claim: its comparison, or an ordering's count and the
+    comparison that decides it (the one that disagrees, else the weakest)."""
+    d = v.summary
+    if d is None:
+        return "no data", "none", "the study has no rows for it"
+    if len(v.comparisons) == 1:
+        return _num(d.point), _interval(d), to_resolve(d)
+    if len({c.point for c in v.comparisons}) == 1:  # one statistic against two thresholds: a band
+        low, high = sorted(c.threshold for c in v.comparisons)
+        return f"{_num(d.point)} (the paper: between {low:+g} and {high:+g})", _interval(d), to_resolve(d)
+    counts = {verdict: sum(c.verdict == verdict for c in v.comparisons) for verdict in (AGREES, DISAGREES)}
+    estimate = (
+        f"{counts[AGREES]} of {len(v.comparisons)} comparisons agree, {counts[DISAGREES]} disagree; "
+        f"{'against' if d.verdict == DISAGREES else 'weakest'}: {d.label} {_num(d.point)}"
+    )
+    return estimate, _interval(d), to_resolve(d)
+
+
+def claims_section(verdicts: Sequence[ClaimVerdict]) -> list[str]:
+    """The claims table (claim, source, estimate, interval, verdict) and every comparison behind it."""
+    if not verdicts:
+        return []
+    comparisons = comparison_rows(verdicts)
+    lines = [
+        CLAIMS_HEADING,
+        "",
+        "Each claim is tested by comparisons (a mean gap against 0, or one factor's or method's gap against another's, "
+        "a change over N, a slope over the radius, a pair metric against the ±band), decided at 95% with Holm's "
+        "correction over every comparison of this study: each on the wider of two seed-level intervals, the "
+        f"bootstrap's ({BOOTSTRAP_RESAMPLES} resamples) and a t-interval over training seeds (none with one seed, so "
+        "nothing is resolved there). **agrees** / **disagrees**: the interval lies on the paper's / the other side; "
+        "**capped**: the success rates leave less room the paper's way than the design resolves; **not resolved**: "
+        "otherwise. A claim of several comparisons disagrees if one does and agrees only if all do. What would "
+        "resolve it: the episodes per cell at these seeds (episode noise only, a lower bound) and the seeds at the "
+        "observed spread between seeds (`study/results/claims.py`).",
+        "",
+        "| " + " | ".join(CLAIM_COLUMNS) + " |",
+        "|---|---|---|---|---|---|",
+    ]
+    for claim, source, estimate, interval, verdict, resolve in claim_rows(verdicts):
+        lines.append(f"| {claim} | {source} | {estimate} | {interval} | **{verdict}** | {resolve} |")
+    if comparisons:
+        lines += ["", "| " + " | ".join(COMPARISON_COLUMNS) + " |", "|---|---|---|---|---|---|"]
+        lines += ["| " + " | ".join(row) + " |" for row in comparisons]
+    lines.append("")
+    return lines
+
+
+CLAIM_COLUMNS = ("claim", "source", "estimate", "interval", "verdict", "to resolve")
+COMPARISON_COLUMNS = ("comparison", "estimate", "interval", "p", "verdict", "to resolve")
+
+
+def claim_rows(verdicts: Sequence[ClaimVerdict]) -> list[tuple[str, str, str, str, str, str]]:
+    """The claims table's cells (:data:`CLAIM_COLUMNS`), one row per claim, as report.md and report.html print
+    them."""
+    out = []
+    for v in verdicts:
+        estimate, interval, resolve = claim_cells(v)
+        claim = v.claim.text + (f" ({v.claim.task})" if v.claim.task else "")
+        out.append((claim, v.claim.source, estimate, interval, v.verdict, resolve))
+    return out
+
+
+def comparison_rows(verdicts: Sequence[ClaimVerdict]) -> list[tuple[str, str, str, str, str, str]]:
+    """Every comparison behind the claims, once (:data:`COMPARISON_COLUMNS`); none when each claim is one
+    comparison (the claims table shows them all)."""
+    if not any(len(v.comparisons) > 1 for v in verdicts):
+        return []
+    seen: dict[str, Decided] = {}
+    for v in verdicts:
+        for d in v.comparisons:
+            seen.setdefault(d.label + (f" ({v.claim.task})" if v.claim.task else ""), d)
+    return [
+        (label, _num(d.point), _interval(d), f"{d.p_value:.4f}", d.verdict, to_resolve(d)) for label, d in seen.items()
+    ]
+
+
+def ordering_sentence(verdicts: Sequence[ClaimVerdict]) -> str:
+    """One line on the paper's ordering, from its claims' verdicts ("" when the study tests none)."""
+    found = [v for v in verdicts if v.claim.kind == "ordering"]
+    if not found:
+        return ""
+    parts = []
+    for v in found:
+        agree = sum(c.verdict == AGREES for c in v.comparisons)
+        against = sum(c.verdict == DISAGREES for c in v.comparisons)
+        parts.append(
+            f"{v.claim.text}: **{v.verdict}** ({agree} of {len(v.comparisons)} comparisons resolved the paper's way, "
+            f"{against} the other way)"
+        )
+    return "Against the paper's ordering (decided in *The paper's claims* below): " + "; ".join(parts) + "."

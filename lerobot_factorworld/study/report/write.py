@@ -1,0 +1,196 @@
+"""Study outputs: ``results.csv`` (``results/rows.py``), ``episodes.parquet`` (one row per episode: ``episodes.py``),
+PNG plots mirroring the paper's figures (``plots.py``), the task families' own files and sections (their
+report parts' ``write_report_files`` and ``report_sections``, ``family_report.py``, e.g. a CSV of breakdowns per episode record), and
+``report.md`` (``markdown.py``).
+
+One renderer, two ways in, so a documented number can always be recomputed from committed files:
+
+- a study that ran (:func:`write_report`) writes ``results.csv`` and the families' CSV files from its
+  finished steps, then renders the report from what it wrote, read back (:func:`render_report`);
+- ``factorworld report`` (:func:`regenerate_report`) renders the same report from a ``results.csv``, the
+  study's config and the families' CSV files alone, with no step folder: only the "Where the time went"
+  section (per-step timings) is left out, and a line says so.
+"""
+
+from __future__ import annotations
+
+import json
+import shutil
+from collections.abc import Sequence
+from pathlib import Path
+
+from ...core.io import atomic_write_text
+from ...core.settings import parse_config
+from ...families import family_of
+from ..plan.config import RUN_CONFIG_FILE, StudyConfig, write_run_config
+from ..plan.grid import Plan, make_plan
+from ..plan.profile import profile_markdown
+from ..results.episodes import EPISODES_FILE, episode_rows, write_episodes
+from ..results.rows import RESULTS_FILE, finished_evaluations, read_results, result_rows, write_results
+from ..run.recording import VIDEOS_DIR
+from ..run.steps import STEPS_DIR
+from .episode_videos import MANIFEST, collect_videos
+from .family_report import FamilyReport, report_of
+from .html_report import write_html_report
+from .markdown import REPORT_FILE, decide_claims, render
+from .plots import write_plots
+
+PUBLISHED_CONFIG = "config.yaml"  # the study's config, committed next to its results.csv (docs/results/<study>/)
+REPORT_COMMAND = "report"  # factorworld report
+REUSE_SETTING = "reuse_from"  # StudyConfig's other studies' folders: how a study ran, left out of a published config
+NO_TIMINGS = (
+    "*Where the time went* is left out: it comes from the per-step timings in the study's step folders, "
+    f"which a report regenerated from `{RESULTS_FILE}` does not read."
+)
+
+
+def write_report(cfg: StudyConfig, plan: Plan, study_dir: str | Path, command: str) -> tuple[Path, Path, list[Path]]:
+    """A study that ran: ``results.csv``, ``episodes.parquet`` and the families' files from the finished
+    evaluations, then the plots and ``report.md`` rendered from them, with where the time went at the end;
+    returns the CSV's, the report's and the plots' paths (the episodes are ``study_dir / EPISODES_FILE``)."""
+    study_dir = Path(study_dir)
+    evaluations = finished_evaluations(plan, study_dir)
+    csv_path = write_results(result_rows(cfg, evaluations), study_dir / RESULTS_FILE)
+    write_episodes(episode_rows(cfg, evaluations, study_dir), study_dir / EPISODES_FILE)
+    for family in families_of(cfg):
+        family.write_report_files(cfg=cfg, evaluations=evaluations, study_dir=study_dir)
+    collect_videos(evaluations, study_dir)  # the recorded episodes, for report.html's paired viewer
+    timing = profile_markdown(plan, study_dir)  # last: it is about the run, not the results
+    report, plots = render_report(cfg, read_results(csv_path), study_dir, command, len(plan.of_kind("eval")), timing)
+    return csv_path, report, plots
+
+
+def rebuild_report(cfg: StudyConfig, command: str) -> tuple[Path, Path, list[Path]]:
+    """Rewrite the outputs of the finished study in ``cfg.out_dir`` from its step results (nothing is run)."""
+    return write_report(cfg, make_plan(cfg), cfg.out_dir, command)
+
+
+def render_report(
+    cfg: StudyConfig, rows: list[dict], out_dir: Path, command: str, planned: int, tail: Sequence[str] = ()
+) -> tuple[Path, list[Path]]:
+    """The one renderer: plots, ``report.md`` and ``report.html`` (with its paired-episode viewer of
+    ``out_dir/episodes/``) in ``out_dir`` from ``results.csv`` rows and the families' files in ``out_dir``
+    (``tail``: lines after report.md); report.md's and the plots' paths."""
+    plots = write_plots(rows, cfg, out_dir)
+    verdicts = decide_claims(cfg, rows)  # once, for both reports
+    families = families_of(cfg)
+
+    def family_sections(part: str) -> list[str]:
+        return [
+            line
+            for family in families
+            for line in family.report_sections(cfg=cfg, rows=rows, study_dir=out_dir, part=part)
+        ]
+
+    text = render(cfg, rows, plots, command, planned, family_sections, verdicts)
+    if tail:
+        text = text.rstrip("\n") + "\n\n" + "\n".join(tail)
+    write_html_report(cfg, rows, out_dir, verdicts)
+    return atomic_write_text(out_dir / REPORT_FILE, text), plots
+
+
+def families_of(cfg: StudyConfig) -> list[FamilyReport]:
+    """The report parts of the study's task families, each once, in task order."""
+    return list(dict.fromkeys(report_of(family_of(task)) for task in cfg.tasks))
+
+
+# --- factorworld report: from committed files alone -----------------------------------------------
+
+
+def regenerate_report(
+    results: str | Path, config: str | Path | None = None, out: str | Path | None = None
+) -> tuple[Path, list[Path]]:
+    """``report.md`` and the plots from a ``results.csv``, the study's config and the families' files next to
+    it; nothing is run. The config defaults to the one next to the CSV: a study folder's ``config.json`` (the
+    settings it ran with, command-line overrides included), else a published folder's ``config.yaml``.
+    ``out`` (default: the CSV's folder) receives copies of every input, so that the report's "next to this
+    file" holds wherever it is written; in a study folder that still has its steps the report keeps "Where
+    the time went". Returns the report's and the plots' paths; bad input raises one-line errors."""
+    results = Path(results)
+    config = Path(config) if config else _config_next_to(results)
+    rows = read_results(results)
+    cfg = load_config(config)
+    check_study_name(rows, cfg.name, results)
+    plan = make_plan(cfg)
+    check_rows_planned(rows, plan, results, config)
+    out = Path(out) if out else results.parent
+    out.mkdir(parents=True, exist_ok=True)
+    _copy(results, out / RESULTS_FILE)
+    if (results.parent / EPISODES_FILE).is_file():  # not read by the report, but part of the results
+        _copy(results.parent / EPISODES_FILE, out / EPISODES_FILE)
+    videos = results.parent / VIDEOS_DIR
+    if (videos / MANIFEST).is_file() and videos.resolve() != (out / VIDEOS_DIR).resolve():  # report.html's viewer
+        shutil.copytree(videos, out / VIDEOS_DIR, dirs_exist_ok=True)
+    if not (out / RUN_CONFIG_FILE).is_file() or config.resolve() != (out / RUN_CONFIG_FILE).resolve():
+        _publish_config(config, out / PUBLISHED_CONFIG)
+    for family in families_of(cfg):
+        for name in family.report_files:
+            if (results.parent / name).is_file():
+                _copy(results.parent / name, out / name)
+            elif out.resolve() != results.parent.resolve():
+                (out / name).unlink(missing_ok=True)  # a stale copy would be read as this study's
+    command = f"factorworld {REPORT_COMMAND} --results={RESULTS_FILE}"
+    timing = profile_markdown(plan, out) if (out / STEPS_DIR).is_dir() else []
+    return render_report(cfg, rows, out, command, len(plan.of_kind("eval")), timing or [NO_TIMINGS, ""])
+
+
+def _config_next_to(results: Path) -> Path:
+    for name in (RUN_CONFIG_FILE, PUBLISHED_CONFIG):
+        if (results.parent / name).is_file():
+            return results.parent / name
+    raise FileNotFoundError(
+        f"no study config next to {results} ({RUN_CONFIG_FILE} or {PUBLISHED_CONFIG}): pass --config_path=<the study's "
+        "config YAML>"
+    )
+
+
+def load_config(path: str | Path) -> StudyConfig:
+    """The study config a ``results.csv`` was made with (a YAML file as ``factorworld study`` reads it).
+
+    Its ``reuse_from`` is left out: where finished steps were linked from is how a study ran on one machine,
+    not what it computed (a step's key is its inputs), and those folders need not exist where a report is
+    regenerated."""
+    return parse_config(StudyConfig, [f"--config_path={path}", f"--{REUSE_SETTING}=[]"], "study")
+
+
+def check_study_name(rows: Sequence[dict], name: str, results: Path) -> None:
+    """Refuse a config of another study than the rows'."""
+    studies = sorted({r["study"] for r in rows})
+    if studies and studies != [name]:
+        raise ValueError(f"{results} holds study {', '.join(map(repr, studies))}, but the config is of study {name!r}")
+
+
+def check_rows_planned(rows: Sequence[dict], plan: Plan, results: Path, config: Path) -> None:
+    """Refuse rows the config would not have made (another grid under the same study name): every row's cell
+    and condition must be one of the plan's evaluations, or the report would describe a grid that never ran."""
+    planned = {_cell(step.meta) for step in plan.of_kind("eval")}
+    unplanned = [_cell(row) for row in rows if _cell(row) not in planned]
+    if unplanned:
+        method, task, n, seed, widths, condition = unplanned[0]
+        raise ValueError(
+            f"{len(unplanned)} row(s) of {results} are not in the plan of {config}, e.g. method={method} task={task} "
+            f"N={n} seed={seed} widths={widths} condition={condition}: pass the config that made them"
+        )
+
+
+def _cell(labels: dict) -> tuple:
+    keys = ("method", "task", "n_train_envs", "seed", "widths", "condition")
+    return tuple(str(labels[k]) for k in keys)
+
+
+def _publish_config(source: Path, target: Path) -> None:
+    """Copy the study's config next to its results. A run's ``config.json`` (:data:`RUN_CONFIG_FILE`, as the
+    runner wrote it) is written without the machine-local ``reuse_from`` folders (:func:`load_config`), in the
+    runner's own format; any other config file is copied verbatim, comments included (a ``reuse_from`` in it is
+    ignored when it is read)."""
+    if source.name == RUN_CONFIG_FILE:
+        settings = json.loads(source.read_text())
+        if settings.get(REUSE_SETTING):
+            write_run_config(target, {**settings, REUSE_SETTING: []})
+            return
+    _copy(source, target)
+
+
+def _copy(source: Path, target: Path) -> None:
+    if not (target.exists() and source.resolve() == target.resolve()):
+        shutil.copyfile(source, target)
