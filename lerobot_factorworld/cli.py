@@ -154,15 +154,16 @@ STUDY_FLAG_ALIASES = {
 
 def cmd_study(args: list[str]) -> None:
     # LeRobot and torch (~4 s): `factorworld tasks` and friends stay instant
-    from .study.plan.config import StudyConfig  # noqa: PLC0415
+    from .study.plan.command import StudyCommand  # noqa: PLC0415
     from .study.runner import inspect_study, run_study  # noqa: PLC0415
 
     command = "factorworld study " + " ".join(args)
-    cfg = parse_config(StudyConfig, _study_args(args), "study")
-    if cfg.inspects:  # --dry-run, --profile, --fit_cost: nothing runs
-        print(inspect_study(cfg))
+    cfg = parse_config(StudyCommand, _study_args(args), "study")
+    study, options = cfg.grid(), cfg.options()
+    if options.inspects:  # --dry-run, --profile, --fit_cost: nothing runs
+        print(inspect_study(study, options))
         return
-    _report_outcome(run_study(cfg, command=command))
+    _report_outcome(run_study(study, options, command=command))
 
 
 def cmd_profile(args: list[str]) -> None:
@@ -172,16 +173,16 @@ def cmd_profile(args: list[str]) -> None:
 
     command = "factorworld profile " + " ".join(args)
     cfg = parse_config(ProfileConfig, _study_args(args), "profile")
-    study = cfg.study()
+    study, options = cfg.study(), cfg.options()
     if cfg.dataset_root:
         print(
             f"train: the {study.n_train_envs[0]} training environment(s) of dataset {cfg.dataset_root} "
             f"(seed {study.seeds[0]}, varying {', '.join(study.train_factors) or 'no factor'})"
         )
-    if study.inspects:
-        print(inspect_study(study))
+    if options.inspects:
+        print(inspect_study(study, options))
         return
-    _report_outcome(run_study(study, command=command))
+    _report_outcome(run_study(study, options, command=command))
 
 
 def _report_outcome(outcome: StudyOutcome) -> None:
@@ -233,14 +234,14 @@ def cmd_configs(args: list[str]) -> None:
     """The packaged study configs by name, each with its ``--dry-run`` estimate on this machine's kind (2 cores)."""
     no_settings("configs", args)
     # the study's config checks its policies with LeRobot (~4 s): only when this command runs
-    from .study.plan.config import StudyConfig  # noqa: PLC0415
+    from .study.plan.command import StudyCommand  # noqa: PLC0415
     from .study.plan.cost import estimate  # noqa: PLC0415
     from .study.plan.grid import make_plan  # noqa: PLC0415
 
     print(f"{'name':40s} {'steps':>6s} {'2 cores':>8s} {'1 GPU':>7s}  (--dry-run's estimates, from nothing cached)")
     for name in study_names():
-        cfg = parse_config(StudyConfig, [f"{CONFIG_PATH_FLAG}={resolve_study_config(name)}"], "study")
-        plan = make_plan(cfg)
+        cfg = parse_config(StudyCommand, [f"{CONFIG_PATH_FLAG}={resolve_study_config(name)}"], "study")
+        plan = make_plan(cfg.grid())
         cpu, gpu = list(estimate(plan, plan.steps, cfg.execution).values())[:2]
         print(f"{name:40s} {len(plan.steps):6d} {cpu:7.1f}h {gpu:6.1f}h")
 

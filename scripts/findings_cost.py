@@ -23,7 +23,7 @@ from pathlib import Path
 
 from lerobot_factorworld.core.settings import parse_config
 from lerobot_factorworld.study.plan import cost
-from lerobot_factorworld.study.plan.config import StudyConfig
+from lerobot_factorworld.study.plan.command import StudyCommand
 from lerobot_factorworld.study.plan.grid import Plan, make_plan
 
 REPO_ROOT = Path(__file__).resolve().parents[1]
@@ -51,7 +51,8 @@ def first_of_each_finding(names: list[str]) -> list[str]:
 def plan_configs(names: list[str]) -> dict[str, Plan]:
     """Each config's plan, made once (the totals below reuse them)."""
     return {
-        name: make_plan(parse_config(StudyConfig, [f"--config_path={CONFIGS / name}.yaml"], "study")) for name in names
+        name: make_plan(parse_config(StudyCommand, [f"--config_path={CONFIGS / name}.yaml"], "study").grid())
+        for name in names
     }
 
 

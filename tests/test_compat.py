@@ -19,7 +19,7 @@ from lerobot_factorworld.cli import main as factorworld
 from lerobot_factorworld.core.settings import parse_config
 from lerobot_factorworld.datasets.collect import CollectConfig, collect
 from lerobot_factorworld.factors.values import save_configs
-from lerobot_factorworld.study.plan.config import StudyConfig
+from lerobot_factorworld.study.plan.command import StudyCommand
 from lerobot_factorworld.study.plan.grid import make_plan
 
 GOLDEN = Path(__file__).parent / "data" / "compat"
@@ -102,7 +102,7 @@ def test_study_step_keys_and_inputs_are_unchanged(monkeypatch):
     expected_inputs = json.loads((GOLDEN / "study_inputs.json").read_text())
     actual_keys, actual_inputs = {}, {}
     for name, expected in expected_keys.items():
-        plan = make_plan(parse_config(StudyConfig, [f"--config_path=configs/study/{name}.yaml"], "study"))
+        plan = make_plan(parse_config(StudyCommand, [f"--config_path=configs/study/{name}.yaml"], "study"))
         keys = [f"{s.kind} {s.key}" for s in plan.steps]
         if isinstance(expected, dict):  # a large plan: its key list by count and digest
             keys = {"n": len(keys), "sha256": hashlib.sha256("\n".join(keys).encode()).hexdigest()}

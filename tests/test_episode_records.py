@@ -28,6 +28,7 @@ from lerobot_factorworld.datasets import hub
 from lerobot_factorworld.protocol.conditions import fingerprint
 from lerobot_factorworld.protocol.sidecar import SIDECAR
 from lerobot_factorworld.study import runner
+from lerobot_factorworld.study.plan.command import StudyCommand
 from lerobot_factorworld.study.plan.config import StudyConfig
 from lerobot_factorworld.study.plan.grid import make_plan
 from lerobot_factorworld.study.report.write import regenerate_report
@@ -123,7 +124,7 @@ def _fake_steps(mp: pytest.MonkeyPatch) -> None:
 def _config(folder: Path, **overrides) -> tuple[StudyConfig, Path]:
     path = folder / "records.yaml"
     path.write_text(json.dumps({**SETTINGS, "out_dir": str(folder / "study"), **overrides}))
-    return parse_config(StudyConfig, [f"--config_path={path}"], "study"), path
+    return parse_config(StudyCommand, [f"--config_path={path}"], "study"), path
 
 
 @pytest.fixture(scope="module")
@@ -132,7 +133,7 @@ def study(tmp_path_factory) -> tuple[StudyConfig, runner.StudyOutcome]:
     cfg, _ = _config(tmp_path_factory.mktemp("records"))
     with pytest.MonkeyPatch.context() as mp:
         _fake_steps(mp)
-        outcome = runner.run_study(cfg, command="test")
+        outcome = runner.run_study(*cfg.parts(), command="test")
     assert not outcome.failed and outcome.ran == {"collect": 2, "train": 2, "eval": 8}
     return cfg, outcome
 
@@ -298,7 +299,7 @@ def test_push_settings_are_checked_in_one_line_before_any_work(tmp_path, monkeyp
         path = tmp_path / "c.yaml"
         path.write_text(json.dumps({**SETTINGS, "out_dir": str(tmp_path / "s")}))
         with pytest.raises(SettingError, match=re.escape(message)) as err:
-            parse_config(StudyConfig, [f"--config_path={path}", *flags], "study")
+            parse_config(StudyCommand, [f"--config_path={path}", *flags], "study")
         assert "\n" not in str(err.value)
     cfg, _ = _config(tmp_path, hub_repo_id="local/kept")  # not pushing: the repo id is not used
     assert not cfg.push_to_hub
@@ -307,7 +308,7 @@ def test_push_settings_are_checked_in_one_line_before_any_work(tmp_path, monkeyp
     monkeypatch.setitem(steps.RUNNERS, "collect", lambda *a: ran.append(a))
     monkeypatch.setattr(huggingface_hub, "get_token", lambda: None)  # not logged in
     with pytest.raises(ValueError, match="push_to_hub=true needs a Hugging Face token with write access"):
-        runner.run_study(cfg, command="no token")
+        runner.run_study(*cfg.parts(), command="no token")
     assert not ran and not Path(cfg.out_dir).exists()
 
 
@@ -397,7 +398,7 @@ def test_the_study_pushes_after_its_report_and_an_unreachable_hub_is_one_warning
         name: before[name] for name in (EPISODES_FILE, RESULTS_FILE)
     }
     fake = FakeHub().install(monkeypatch)
-    outcome = runner.run_study(_config(tmp_path, push_to_hub=True, hub_repo_id=REPO)[0], command="again")
+    outcome = runner.run_study(*_config(tmp_path, push_to_hub=True, hub_repo_id=REPO)[0].parts(), command="again")
     assert (
         outcome.pushed and len(fake.commits) == 1 and "pushed episodes.parquet (32 episodes)" in capsys.readouterr().out
     )

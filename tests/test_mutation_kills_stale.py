@@ -16,6 +16,7 @@ from lerobot_factorworld.study.plan import stale
 from lerobot_factorworld.study.plan.config import EvalSettings, MethodConfig, StudyConfig
 from lerobot_factorworld.study.plan.grid import Plan, make_plan
 from lerobot_factorworld.study.run import steps
+from lerobot_factorworld.study.run.options import RunOptions
 
 OTHER = "826fe542cafcf25ef4dd4d5f7e92595c9abe6388"
 NOW = Provenance("a" * 40, True, "1" * 64)
@@ -66,9 +67,9 @@ def test_exactly_stale_labels_steps_are_all_named_with_no_more(study):
 def test_strict_refuses_in_these_words(study):
     cfg, plan, _ = study
     found = [stale.Stale(plan.of_kind("collect")[0], OLD)]
-    stale.check_not_stale(cfg, found)  # not strict: nothing to refuse
+    stale.check_not_stale(RunOptions(), found)  # not strict: nothing to refuse
     with pytest.raises(ValueError) as err:
-        stale.check_not_stale(replace(cfg, strict=True), found)
+        stale.check_not_stale(RunOptions(strict=True), found)
     assert str(err.value) == (
         f"{stale.stale_summary(found, NOW)}; --strict=true refuses to mix them with steps of the current code: "
         "--rerun_stale=true redoes them, or choose another out_dir"
@@ -85,16 +86,16 @@ def test_the_dirty_tree_joins_the_warning_only_when_steps_run(study, monkeypatch
     assert found == [stale.Stale(collect, OLD)]
     summary = stale.stale_summary(found, dirty)
     # every step cached and stale ones kept: nothing runs, so the dirty tree is not named
-    assert stale.provenance_warning(cfg, plan, study_dir, found) == (
+    assert stale.provenance_warning(RunOptions(), plan, study_dir, found) == (
         f"warning: {summary}; --rerun_stale=true redoes them, --strict=true refuses"
     )
     # redone: the stale step and its 4 dependents run with the dirty tree, and both parts are named, "; " apart
-    assert stale.provenance_warning(replace(cfg, rerun_stale=True), plan, study_dir, found) == (
+    assert stale.provenance_warning(RunOptions(rerun_stale=True), plan, study_dir, found) == (
         f"warning: {summary}; --rerun_stale=true: they and the 4 cached step(s) depending on them are redone "
         "(old folders kept as steps/<kind>/<key>.stale-<commit>); the current code, aaaaaaa-dirty (source "
         "111111111111), has uncommitted changes: steps run now are not reproducible from a commit"
     )
-    assert stale.provenance_warning(cfg, plan, study_dir, []) is None  # clean of stale steps, nothing to run
+    assert stale.provenance_warning(RunOptions(), plan, study_dir, []) is None  # clean of stale steps, nothing to run
 
 
 def test_rerun_stale_sets_dependents_aside_first_under_the_commit_that_made_each(study):

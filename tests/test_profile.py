@@ -161,6 +161,7 @@ def test_a_study_mixing_a_trained_and_a_given_method_plans_both(factorworld_chec
     from lerobot_factorworld.study.plan.grid import make_plan
     from lerobot_factorworld.study.run.executors import task_units
     from lerobot_factorworld.study.run.inputs import CollectInputs, EvalInputs
+    from lerobot_factorworld.study.run.options import RunOptions
 
     cfg = StudyConfig(
         out_dir=str(tmp_path / "mixed"),
@@ -187,7 +188,7 @@ def test_a_study_mixing_a_trained_and_a_given_method_plans_both(factorworld_chec
         assert environments == CollectInputs.from_dict(collect.inputs).environments()
     units = task_units(given, free=1, grouped=True)
     assert sorted(len(u) for u in units) == [2, 2]  # one task per given checkpoint's cell
-    text = describe(cfg, plan)
+    text = describe(cfg, plan, RunOptions())
     assert "collect       4 steps" in text and "eval         12 steps" in text and "not startable" not in text
 
     with pytest.raises(ValueError, match="names a checkpoint and policy settings"):

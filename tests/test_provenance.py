@@ -18,6 +18,7 @@ from lerobot_factorworld.core.provenance import Provenance, git_state, source_ha
 from lerobot_factorworld.core.settings import parse_config
 from lerobot_factorworld.study import runner
 from lerobot_factorworld.study.plan import stale
+from lerobot_factorworld.study.plan.command import StudyCommand
 from lerobot_factorworld.study.plan.config import RUN_CONFIG_FILE, StudyConfig
 from lerobot_factorworld.study.plan.grid import Plan, make_plan
 from lerobot_factorworld.study.results.rows import RESULT_COLUMNS, Evaluation, commits_of, csv_text, result_rows
@@ -160,7 +161,7 @@ def ran(monkeypatch) -> list[steps.Step]:
 def _study(tmp_path: Path, *flags: str) -> tuple[StudyConfig, Path]:
     config = tmp_path / "study.yaml"
     config.write_text(json.dumps({**SETTINGS, "out_dir": str(tmp_path / "study")}))
-    return parse_config(StudyConfig, [f"--config_path={config}", *flags], "study"), config
+    return parse_config(StudyCommand, [f"--config_path={config}", *flags], "study"), config
 
 
 def test_a_step_records_its_provenance_and_its_key_does_not_hold_it(tmp_path, ran, monkeypatch):
@@ -240,7 +241,7 @@ def _warnings(err: str) -> list[str]:
 def finished(tmp_path, ran, capsys) -> tuple[StudyConfig, Plan]:
     """The study run once with the current code (2 collections, 2 trainings, 6 evaluations)."""
     cfg, _ = _study(tmp_path)
-    outcome = runner.run_study(cfg, command="test")
+    outcome = runner.run_study(*cfg.parts(), command="test")
     assert outcome.ran == {"collect": 2, "train": 2, "eval": 6} and not outcome.failed
     capsys.readouterr()
     ran.clear()
@@ -249,7 +250,7 @@ def finished(tmp_path, ran, capsys) -> tuple[StudyConfig, Plan]:
 
 def test_cached_steps_of_the_current_code_give_no_warning(finished, ran, capsys):
     cfg, _ = finished
-    outcome = runner.run_study(cfg, command="again")
+    outcome = runner.run_study(*cfg.parts(), command="again")
     assert outcome.ran == {"collect": 0, "train": 0, "eval": 0} and outcome.stale == 0 and not ran
     assert _warnings(capsys.readouterr().err) == []
 
@@ -260,7 +261,7 @@ def test_a_cached_step_made_by_other_code_is_named_in_one_warning_line(finished,
     _made_by(collect, cfg.out_dir, Provenance(OTHER, True, OTHER_HASH))
     old_eval = plan.of_kind("eval")[-1]
     _made_by(old_eval, cfg.out_dir, None)
-    outcome = runner.run_study(cfg, command="again")
+    outcome = runner.run_study(*cfg.parts(), command="again")
     assert outcome.stale == 2 and not ran and not outcome.set_aside  # warned, cached steps still used
     (line,) = _warnings(capsys.readouterr().err)
     assert line.startswith(
@@ -284,7 +285,7 @@ def test_the_warning_names_a_few_labels_and_counts_the_rest(finished, capsys):
 def test_dry_run_prints_the_stale_line_and_changes_nothing(finished, ran, capsys):
     cfg, plan = finished
     _made_by(_collect_n1(plan), cfg.out_dir, Provenance(OTHER, True, OTHER_HASH))
-    text = runner.inspect_study(replace(cfg, dry_run=True, rerun_stale=True))
+    text = runner.inspect_study(*replace(cfg, dry_run=True, rerun_stale=True).parts())
     assert "collect" in text and not ran
     (line,) = _warnings(capsys.readouterr().err)
     assert "1 cached step was made by other code" in line and "collect x1 at 826fe54" in line
@@ -301,7 +302,7 @@ def test_strict_refuses_with_one_line_before_any_work(finished, ran, capsys):
     config_json = (Path(cfg.out_dir) / RUN_CONFIG_FILE).read_text()
     strict = replace(cfg, strict=True)
     with pytest.raises(ValueError, match="1 cached step was made by other code") as err:
-        runner.run_study(strict, command="strict")
+        runner.run_study(*strict.parts(), command="strict")
     assert "\n" not in str(err.value) and "collect x1 at 826fe54" in str(err.value)
     assert "--strict=true refuses" in str(err.value)
     assert not ran and (Path(cfg.out_dir) / RUN_CONFIG_FILE).read_text() == config_json  # nothing written
@@ -322,7 +323,7 @@ def test_rerun_stale_redoes_the_step_and_its_dependents_and_keeps_the_old_folder
     _made_by(collect, cfg.out_dir, Provenance(OTHER, True, OTHER_HASH))
     dependents = stale.dependents(plan, {collect.key})
     assert {s.kind for s in dependents} == {"train", "eval"} and len(dependents) == 4
-    outcome = runner.run_study(replace(cfg, rerun_stale=True), command="rerun")
+    outcome = runner.run_study(*replace(cfg, rerun_stale=True).parts(), command="rerun")
     assert {s.key for s in ran} == {collect.key} | {s.key for s in dependents}  # the n=2 cell untouched
     assert outcome.ran == {"collect": 1, "train": 1, "eval": 3} and outcome.stale == 1
     (line,) = _warnings(capsys.readouterr().err)
@@ -337,7 +338,7 @@ def test_rerun_stale_redoes_the_step_and_its_dependents_and_keeps_the_old_folder
     for step in dependents:  # made by the current code from the old dataset: kept under their own commit
         assert step.folder(cfg.out_dir).with_name(f"{step.key}.stale-{now.revision(short=True)}").is_dir()
     ran.clear()
-    again = runner.run_study(cfg, command="again")
+    again = runner.run_study(*cfg.parts(), command="again")
     assert not ran and again.stale == 0 and _warnings(capsys.readouterr().err) == []
 
 
@@ -348,8 +349,8 @@ def test_rerun_stale_redoes_dependents_of_dependents(tmp_path, ran, capsys):
     config = tmp_path / "study.yaml"
     ood = {"name": "bc_ood", "policy": {"type": "bc"}, "extra_tasks": ["pick-place"]}
     config.write_text(json.dumps({**SETTINGS, "n_train_envs": [1], "methods": [ood], "out_dir": str(tmp_path / "s")}))
-    cfg = parse_config(StudyConfig, [f"--config_path={config}"], "study")
-    assert runner.run_study(cfg, command="first").ran == {"collect": 2, "train": 1, "eval": 3}
+    cfg = parse_config(StudyCommand, [f"--config_path={config}"], "study")
+    assert runner.run_study(*cfg.parts(), command="first").ran == {"collect": 2, "train": 1, "eval": 3}
     plan = make_plan(cfg)
     own, other = (next(s for s in plan.of_kind("collect") if s.meta["task"] == t) for t in ("door-open", "pick-place"))
     (train,) = plan.of_kind("train")
@@ -359,7 +360,7 @@ def test_rerun_stale_redoes_dependents_of_dependents(tmp_path, ran, capsys):
     _made_by(other, cfg.out_dir, Provenance(OTHER, True, OTHER_HASH))
     capsys.readouterr()
     ran.clear()
-    outcome = runner.run_study(replace(cfg, rerun_stale=True), command="rerun")
+    outcome = runner.run_study(*replace(cfg, rerun_stale=True).parts(), command="rerun")
     assert [s.key for s in ran] == [other.key, train.key, *(e.key for e in evals)]  # the first, its dependents'
     assert outcome.ran == {"collect": 1, "train": 1, "eval": 3} and len(outcome.set_aside) == 5
     assert "they and the 4 cached step(s) depending on them are redone" in _warnings(capsys.readouterr().err)[0]
@@ -381,11 +382,11 @@ def test_a_dirty_tree_is_named_when_steps_run_and_recorded(finished, ran, capsys
     cfg, plan = finished
     dirty = replace(provenance.current(), commit=OTHER, clean=False)  # the same source: nothing is stale
     monkeypatch.setattr(provenance, "current", lambda: dirty)
-    runner.run_study(cfg, command="nothing to run")
+    runner.run_study(*cfg.parts(), command="nothing to run")
     assert _warnings(capsys.readouterr().err) == []  # nothing runs: nothing to warn about
     step = plan.of_kind("eval")[0]
     (step.folder(cfg.out_dir) / steps.RESULT_FILE).unlink()
-    runner.run_study(cfg, command="one to run")
+    runner.run_study(*cfg.parts(), command="one to run")
     (line,) = _warnings(capsys.readouterr().err)
     assert line == (
         f"warning: the current code, 826fe54-dirty (source {dirty.source_hash[:12]}), has uncommitted changes: "

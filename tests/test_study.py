@@ -17,6 +17,7 @@ import pytest
 from lerobot_factorworld.protocol.conditions import evaluation_suites
 from lerobot_factorworld.protocol.coverage import coverage
 from lerobot_factorworld.study import metrics, paper
+from lerobot_factorworld.study.plan.command import StudyCommand
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -401,13 +402,12 @@ def _toy_config(
     """The toy study's settings in ``out``; ``n_train_envs`` and ``factors`` (YAML lists) narrow it to a part of
     its plan."""
     from lerobot_factorworld.core.settings import parse_config
-    from lerobot_factorworld.study.plan.config import StudyConfig
 
     path = out.parent / f"{out.name}.yaml"
     text = TOY.format(out=out, executor=executor)
     text = text.replace("n_train_envs: [1, 2]\n", f"n_train_envs: {n_train_envs}\n")
     path.write_text(text.replace("\nfactors: [light, table_texture]\n", f"\nfactors: {factors}\n"))
-    return parse_config(StudyConfig, [f"--config_path={path}"], "study"), path
+    return parse_config(StudyCommand, [f"--config_path={path}"], "study"), path
 
 
 # The tests that use (and, resuming, change) the toy study's folder run on one xdist worker, one after the other.
@@ -420,7 +420,7 @@ def toy(tmp_path_factory):
 
     out = tmp_path_factory.mktemp("study") / "toy"
     cfg, path = _toy_config(out)
-    outcome = run_study(cfg, command=f"factorworld study --config {path}")
+    outcome = run_study(*cfg.parts(), command=f"factorworld study --config {path}")
     return cfg, outcome
 
 
@@ -474,7 +474,7 @@ def test_rerun_does_no_new_work_and_interrupted_study_resumes(toy):
 
     cfg, first = toy
     before = first.results.read_text()
-    again = run_study(cfg, command="rerun")
+    again = run_study(*cfg.parts(), command="rerun")
     assert again.ran == {"collect": 0, "train": 0, "eval": 0}
     assert again.cached == {"collect": 2, "train": 2, "eval": 8}
     assert again.results.read_text() == before
@@ -484,7 +484,7 @@ def test_rerun_does_no_new_work_and_interrupted_study_resumes(toy):
         (step.folder(cfg.out_dir) / "result.json").unlink()
     (evals[1].folder(cfg.out_dir) / "result.json.tmp123").write_text("{half")
     first.results.unlink()
-    resumed = run_study(cfg, command="resume")
+    resumed = run_study(*cfg.parts(), command="resume")
     assert resumed.ran == {"collect": 0, "train": 0, "eval": 2}
     assert resumed.results.read_text() == before  # same rows, none duplicated
 
@@ -584,7 +584,7 @@ def test_a_plan_on_a_local_ray_instance_gives_the_same_results(toy, tmp_path):
     plan = make_plan(ray_cfg)
     assert [s.kind for s in plan.steps] == ["collect", "train", "eval", "eval"]
     assert {s.key for s in plan.steps} <= {s.key for s in make_plan(cfg).steps}
-    outcome = run_study(ray_cfg, command="ray")
+    outcome = run_study(*ray_cfg.parts(), command="ray")
     assert not outcome.failed, outcome.failed
     assert outcome.ran == {"collect": 1, "train": 1, "eval": 2}
     rows, local_rows = list(csv.DictReader(open(outcome.results))), list(csv.DictReader(open(local.results)))
@@ -618,9 +618,9 @@ def test_a_study_reuses_another_studys_finished_steps_by_key(toy, tmp_path):
     narrow, _ = _toy_config(tmp_path / "reuser", n_train_envs="[1]", factors="[light, camera_pos]")
     reuser = replace(narrow, reuse_from=[cfg.out_dir])
     assert "eval          4 steps,      2 cached (2 in reuse_from),      2 to run" in describe(
-        reuser, make_plan(reuser)
+        reuser.grid(), make_plan(reuser), reuser.options()
     )
-    outcome = run_study(reuser, command="reuse")
+    outcome = run_study(*reuser.parts(), command="reuse")
     assert not outcome.failed, outcome.failed
     assert outcome.ran == {"collect": 0, "train": 0, "eval": 2}
     assert outcome.cached == {"collect": 1, "train": 1, "eval": 2}
@@ -660,7 +660,7 @@ def test_a_batched_evaluation_is_its_own_step_and_runs_vectorised(toy, tmp_path)
     cfg, _ = toy
     narrow, _ = _toy_config(tmp_path / "batched", n_train_envs="[1]", factors="[light]")
     batched = replace(narrow, reuse_from=[cfg.out_dir], eval=replace(narrow.eval, batch_size=2))
-    outcome = run_study(batched, command="batched")
+    outcome = run_study(*batched.parts(), command="batched")
     assert not outcome.failed, outcome.failed
     assert outcome.ran == {"collect": 0, "train": 0, "eval": 2} and outcome.cached == {
         "collect": 1,
@@ -700,7 +700,7 @@ def test_a_study_collects_and_evaluates_at_the_quality_it_names(toy, tmp_path, m
 
     monkeypatch.setattr(runtime, "build_spec", recording_build)
     monkeypatch.setattr(runner, "make_executor", lambda kind, study_dir, *a: InlineExecutor(study_dir, a[-1]))
-    outcome = runner.run_study(lod, command="lod")
+    outcome = runner.run_study(*lod.parts(), command="lod")
     assert not outcome.failed, outcome.failed
     assert outcome.ran == {"collect": 1, "train": 1, "eval": 2}  # nothing of the toy's (fast) is reused
     collect = make_plan(lod).of_kind("collect")[0]
@@ -753,9 +753,8 @@ FINDINGS = [name for name in STUDY_CONFIGS if name.startswith("findings/")]
 
 def _config(name: str):
     from lerobot_factorworld.core.settings import parse_config
-    from lerobot_factorworld.study.plan.config import StudyConfig
 
-    return parse_config(StudyConfig, [f"--config_path={ROOT / 'configs' / 'study' / name}"], "study")
+    return parse_config(StudyCommand, [f"--config_path={ROOT / 'configs' / 'study' / name}"], "study")
 
 
 @pytest.mark.parametrize("name", STUDY_CONFIGS)
@@ -833,10 +832,9 @@ def test_study_datasets_store_lossless_frames_by_default():
 def test_paper_config_is_the_papers_grid():
     from lerobot_factorworld.core.settings import parse_config
     from lerobot_factorworld.factors.registry import PAPER_STUDY_FACTORS
-    from lerobot_factorworld.study.plan.config import StudyConfig
     from lerobot_factorworld.study.plan.grid import make_plan, radius_of
 
-    cfg = parse_config(StudyConfig, [f"--config_path={ROOT / 'configs' / 'study' / 'paper.yaml'}"], "study")
+    cfg = parse_config(StudyCommand, [f"--config_path={ROOT / 'configs' / 'study' / 'paper.yaml'}"], "study")
     assert cfg.tasks == ["pick-place", "bin-picking", "door-open"] and cfg.n_train_envs == [5, 20, 50, 100]
     assert len(cfg.seeds) == 5 and cfg.train.epochs == 100 and cfg.eval.n_test_envs == 100
     assert cfg.collect.demos_for("pick-place") == 2000 and cfg.collect.demos_for("door-open") == 1000

@@ -11,11 +11,13 @@ from pathlib import Path
 
 import pytest
 
+from lerobot_factorworld.study.plan.command import StudyCommand
 from lerobot_factorworld.study.plan.config import StudyConfig
 from lerobot_factorworld.study.plan.cost import describe, fit_cost_model
 from lerobot_factorworld.study.plan.grid import make_plan
 from lerobot_factorworld.study.run.eval_env import env_config
 from lerobot_factorworld.study.run.inputs import CollectInputs
+from lerobot_factorworld.study.run.options import RunOptions
 
 ROOT = Path(__file__).resolve().parents[1]
 BC = {"name": "bc", "policy": {"type": "bc"}}
@@ -107,9 +109,11 @@ def test_a_render_quality_other_than_fast_is_in_every_key_and_fast_keeps_them(tm
     assert inputs.environments("lerobot_metaworld").quality is None
     assert env_config(inputs.environments("lerobot_metaworld")).quality == "full"
     # the cost model is fast's: a dry run says so, and it is never refitted from another quality
-    assert "(the model renders at fast; at lod frames cost about half as much" in describe(lod, make_plan(lod))
+    assert "(the model renders at fast; at lod frames cost about half as much" in describe(
+        lod, make_plan(lod), RunOptions()
+    )
     with pytest.raises(ValueError, match="this study renders at lod: fit it on a study at fast"):
-        fit_cost_model(lod, make_plan(lod), tmp_path, path=tmp_path / "model.json")
+        fit_cost_model(lod, make_plan(lod), tmp_path, RunOptions(), path=tmp_path / "model.json")
     assert not (tmp_path / "model.json").exists()
     with pytest.raises(ValueError, match="unknown collect.quality 'ultra'; valid: fast, full, lod"):
         replace(cfg.collect, quality="ultra")
@@ -163,7 +167,7 @@ def test_missing_weights_file_is_refused_before_any_step_runs(tmp_path, monkeypa
     with pytest.raises(FileNotFoundError, match=r"weights file\(s\) not found: method 'r3m': encoder_weights_path"):
         run_study(cfg)
     assert not (tmp_path / "study").exists()
-    assert "not startable yet" in describe(cfg, make_plan(cfg))
+    assert "not startable yet" in describe(cfg, make_plan(cfg), RunOptions())
     config = tmp_path / "s.yaml"
     config.write_text(
         json.dumps(
@@ -280,7 +284,7 @@ def test_pick_language_conditions_and_n_objects_in_a_study():
 def test_pick_study_config_plans_the_real_robot_conditions():
     from lerobot_factorworld.core.settings import parse_config
 
-    cfg = parse_config(StudyConfig, [f"--config_path={ROOT / 'configs' / 'study' / 'pick.yaml'}"], "study")
+    cfg = parse_config(StudyCommand, [f"--config_path={ROOT / 'configs' / 'study' / 'pick.yaml'}"], "study")
     conditions = [s.meta["condition"] for s in make_plan(cfg).of_kind("eval")]
     assert conditions[0] == "train" and len(conditions) == 10
     assert {"held_out_phrasings", "held_out_objects", "table_texture+floor_texture"} <= set(conditions)

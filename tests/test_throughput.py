@@ -20,6 +20,7 @@ from lerobot_factorworld.core.timing import Timings
 from lerobot_factorworld.study.plan.config import StudyConfig
 from lerobot_factorworld.study.plan.grid import make_plan
 from lerobot_factorworld.study.run.executors import can_fork, lend_idle_workers, task_units
+from lerobot_factorworld.study.run.options import RunOptions
 from lerobot_factorworld.study.run.steps import as_lerobot_process, loader_args, stores_video
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -33,7 +34,6 @@ def _cfg(tmp_path: Path, **overrides) -> StudyConfig:
         "train_factors": ["light", "table_texture"],
         "factors": ["light", "table_texture"],
         "methods": [{"name": "bc", "policy": {"type": "bc"}}],
-        "workers": 2,
     }
     settings.update(overrides)
     return StudyConfig(**settings)
@@ -147,7 +147,7 @@ def test_profile_and_cost_fit_read_the_steps_timings(tmp_path, monkeypatch):
     assert model["study_s"] >= 0
     out = tmp_path / "cost_model.json"
     monkeypatch.setattr(cost, "COST_MODEL_FILE", cost.COST_MODEL_FILE)  # the package's file stays untouched
-    text = cost.fit_cost_model(cfg, plan, cfg.out_dir, path=out)
+    text = cost.fit_cost_model(cfg, plan, cfg.out_dir, RunOptions(workers=2), path=out)
     written = json.loads(out.read_text())
     assert written["fitted_on"]["wall_s"] == 40.0 and "estimated" in text
     # the fitted constants are what the estimate uses (the fake results' frames are not the plan's demos)

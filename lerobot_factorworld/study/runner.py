@@ -31,7 +31,8 @@ from .report.write import write_report
 from .results.episodes import push_results
 from .run.checkpoint import check_checkpoints, fetch_checkpoints
 from .run.executors import make_executor, task_units
-from .run.reuse import link_reused_steps
+from .run.options import RunOptions
+from .run.reuse import check_reuse_from, link_reused_steps
 from .run.steps import KINDS, Step, is_done
 
 LOCK_FILE = ".lock"
@@ -53,75 +54,88 @@ class StudyOutcome:
     pushed: bool = False  # the results went to the Hub (push_to_hub)
 
 
-def inspect_study(cfg: StudyConfig) -> str:
-    """What ``dry_run``, ``profile`` or ``fit_cost`` asks for, without running anything: the plan's description
-    (steps, cached, cost, power; cached steps made by other code are named on stderr first), where the finished
-    steps' time went, or what the refitted cost model found."""
-    if not cfg.inspects:
+def inspect_study(cfg: StudyConfig, options: RunOptions) -> str:
+    """What ``options`` asks to inspect (``dry_run``, ``profile`` or ``fit_cost``), without running anything: the
+    plan's description (steps, cached, cost, power; cached steps made by other code are named on stderr first),
+    where the finished steps' time went, or what the refitted cost model found."""
+    _check_grid(cfg)
+    if not options.inspects:
         raise ValueError("inspect_study needs dry_run, profile or fit_cost; run_study runs the study")
+    check_reuse_from(options.reuse_from, cfg.out_dir)
     plan = make_plan(cfg)
     study_dir = Path(cfg.out_dir)
-    if cfg.dry_run:
-        warn_stale(cfg, plan, study_dir, stale_steps(plan, study_dir))
-        return describe(cfg, plan)
-    if cfg.profile:
+    if options.dry_run:
+        warn_stale(options, plan, study_dir, stale_steps(plan, study_dir))
+        return describe(cfg, plan, options)
+    if options.profile:
         return profile_text(plan, study_dir)
-    return fit_cost_model(cfg, plan, study_dir)
+    return fit_cost_model(cfg, plan, study_dir, options)
 
 
-def run_study(cfg: StudyConfig, command: str | None = None) -> StudyOutcome:
-    """Run (or resume) ``cfg``. Cached steps made by other code are named on stderr first, refused under
-    ``strict``, redone under ``rerun_stale`` (see the module docstring). A config that only inspects
-    (``dry_run``, ``profile``, ``fit_cost``) is :func:`inspect_study`'s, refused here."""
-    if cfg.inspects:
+def run_study(cfg: StudyConfig, options: RunOptions | None = None, command: str | None = None) -> StudyOutcome:
+    """Run (or resume) the grid ``cfg`` as ``options`` say (default: one local worker). Cached steps made by
+    other code are named on stderr first, refused under ``strict``, redone under ``rerun_stale`` (see the module
+    docstring). Options that only inspect (``dry_run``, ``profile``, ``fit_cost``) are :func:`inspect_study`'s,
+    refused here."""
+    _check_grid(cfg)
+    options = options or RunOptions()
+    if options.inspects:
         raise ValueError("dry_run, profile and fit_cost run nothing: use inspect_study")
+    check_reuse_from(options.reuse_from, cfg.out_dir)
     start = time.perf_counter()
     fetch_checkpoints([m.checkpoint for m in cfg.given_methods()])  # before planning: keys hash their files
     plan = make_plan(cfg)
     study_dir = Path(cfg.out_dir)
     cfg.check_weight_files()  # before any step runs: weights are never downloaded
     check_checkpoints(plan.given_evaluations())  # a given checkpoint that cannot run on its env: one line
-    if cfg.push_to_hub:
+    if options.push_to_hub:
         check_hub_token()  # before any step runs, not after hours of them
     study_dir.mkdir(parents=True, exist_ok=True)
     command = command or "factorworld study " + " ".join(shlex.quote(a) for a in sys.argv[2:])
     with _lock(study_dir):
-        reused = link_reused_steps(plan.steps, study_dir, cfg.reuse_from)
+        reused = link_reused_steps(plan.steps, study_dir, options.reuse_from)
         if reused:
-            print(f"reused {reused} finished step(s) of {', '.join(cfg.reuse_from)} (reuse_from)", file=sys.stderr)
+            folders = ", ".join(options.reuse_from)
+            print(f"reused {reused} finished step(s) of {folders} (reuse_from)", file=sys.stderr)
         stale = stale_steps(plan, study_dir)  # under the lock: no other run changes them meanwhile
-        check_not_stale(cfg, stale)  # strict: before any work
-        warn_stale(cfg, plan, study_dir, stale)
-        set_aside = rerun_stale(plan, study_dir, stale) if cfg.rerun_stale else []
-        write_run_config(study_dir / RUN_CONFIG_FILE, asdict(cfg))
+        check_not_stale(options, stale)  # strict: before any work
+        warn_stale(options, plan, study_dir, stale)
+        set_aside = rerun_stale(plan, study_dir, stale) if options.rerun_stale else []
+        write_run_config(study_dir / RUN_CONFIG_FILE, {**asdict(cfg), **asdict(options)})  # as a YAML holds them
         atomic_write_json(
             study_dir / PLAN_FILE, [s.to_dict() for s in plan.steps], indent=1, sort_keys=True, default=str
         )
-        outcome = _execute(cfg, plan, study_dir)
+        outcome = _execute(plan, study_dir, options)
         outcome.stale, outcome.set_aside = len(stale), set_aside
         if any(outcome.ran.values()):  # before the report, which states it
-            record_run(study_dir, time.perf_counter() - start, cfg.workers, cfg.execution, outcome.ran)
+            record_run(study_dir, time.perf_counter() - start, options.workers, options.execution, outcome.ran)
         outcome.results, outcome.report, outcome.plots = write_report(cfg, plan, study_dir, command)
-        if cfg.push_to_hub:
-            outcome.pushed = _push(cfg, outcome)
+        if options.push_to_hub:
+            outcome.pushed = _push(options, outcome)
     return outcome
 
 
-def _push(cfg: StudyConfig, outcome: StudyOutcome) -> bool:
+def _check_grid(cfg: StudyConfig) -> None:
+    """A flat study command passed as the grid would run with default options, its own silently dropped."""
+    if isinstance(cfg, RunOptions):
+        raise TypeError("pass the grid and the run options apart: run_study(*command.parts()), not the command")
+
+
+def _push(options: RunOptions, outcome: StudyOutcome) -> bool:
     """Push the written results (``push_results``) and print its one line; never half a study's results."""
     if outcome.failed or outcome.skipped:
         print(
-            f"warning: nothing pushed to {cfg.hub_repo_id}: {len(outcome.failed)} step(s) failed; rerun the same "
+            f"warning: nothing pushed to {options.hub_repo_id}: {len(outcome.failed)} step(s) failed; rerun the same "
             "command to finish the study and push it",
             file=sys.stderr,
         )
         return False
-    pushed, line = push_results(outcome.study_dir, cfg.hub_repo_id)
+    pushed, line = push_results(outcome.study_dir, options.hub_repo_id)
     print(line, file=sys.stdout if pushed else sys.stderr, flush=True)
     return pushed
 
 
-def _execute(cfg: StudyConfig, plan: Plan, study_dir: Path) -> StudyOutcome:
+def _execute(plan: Plan, study_dir: Path, options: RunOptions) -> StudyOutcome:
     outcome = StudyOutcome(study_dir)
     todo = [s for s in plan.steps if not is_done(s, study_dir)]
     for kind in KINDS:
@@ -130,7 +144,9 @@ def _execute(cfg: StudyConfig, plan: Plan, study_dir: Path) -> StudyOutcome:
         outcome.ran[kind] = 0
     if not todo:
         return outcome
-    executor = make_executor(cfg.executor, str(study_dir.resolve()), cfg.workers, cfg.ray_address, todo, cfg.execution)
+    executor = make_executor(
+        options.executor, str(study_dir.resolve()), options.workers, options.ray_address, todo, options.execution
+    )
     bars = {
         kind: tqdm(total=sum(1 for s in todo if s.kind == kind), desc=f"{kind:7s}", unit="step", position=i)
         for i, kind in enumerate(k for k in KINDS if any(s.kind == k for s in todo))
@@ -148,8 +164,8 @@ def _execute(cfg: StudyConfig, plan: Plan, study_dir: Path) -> StudyOutcome:
                 bars[step.kind].update(1)
             ready = [s for s in pending if all(d in done for d in s.deps)]
             ready.sort(key=lambda s: -KINDS.index(s.kind))  # finish cells before starting new ones: early results
-            free = max(0, cfg.workers - len(running))
-            for unit in task_units(ready, free, grouped=cfg.execution == "grouped")[:free]:
+            free = max(0, options.workers - len(running))
+            for unit in task_units(ready, free, grouped=options.execution == "grouped")[:free]:
                 for step in unit:
                     pending.remove(step)
                 running[executor.submit(unit)] = unit

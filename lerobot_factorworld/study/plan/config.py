@@ -22,7 +22,6 @@ import draccus
 
 from ...core.checks import check_at_least, check_choice
 from ...core.io import atomic_write_json
-from ...datasets.hub import check_hub_repo_id
 from ...envs.lerobot_obs import FACTORWORLD_OBS, LEROBOT_METAWORLD_OBS, check_lerobot_task, check_obs_mode
 from ...experts import DEFAULT_ACTION_NOISE
 from ...factors.registry import PAPER_STUDY_FACTORS, WIDTHS, check_task_support, get_factor
@@ -34,11 +33,8 @@ from ...scene.cameras import DEFAULT_CAMERAS_SETTING, DEFAULT_IMAGE_SIZE
 from ...tasks import get_task
 from ..run.checkpoint import checkpoint_setting
 from ..run.inputs import EPOCHS_OVER, OWN_FRAMES
-from ..run.reuse import check_reuse_from
-from ..run.steps import EXECUTIONS  # how steps run, never what they compute
 from .claim_config import ClaimConfig
 
-EXECUTORS = ("local", "ray")
 ALL_PAIRS = "all"
 RADIUS_FACTORS = ("camera_pos", "table_pos")
 RADII_M = {"narrow": 0.025, "medium": 0.05, "wide": 0.075}  # the paper's radii (appendix table)
@@ -409,7 +405,9 @@ def write_run_config(path: str | Path, settings: dict[str, Any]) -> None:
 
 @dataclass
 class StudyConfig:
-    """A generalization-gap study.
+    """A generalization-gap study: the experiment grid and the claims it tests. Every setting here can change
+    what a step computes; how the grid runs (workers, executor, dry-run, ...) is :class:`..run.options.RunOptions`,
+    and a study's YAML file or command line holds both (:class:`.command.StudyCommand`).
 
     Attributes:
         name: Study name (in results and report).
@@ -427,28 +425,6 @@ class StudyConfig:
         collect: Demonstration settings.
         train: Training settings.
         eval: Evaluation settings.
-        executor: ``local`` (a process pool on this machine) or ``ray``.
-        workers: Steps run at once (local pool size, or concurrent Ray tasks).
-        ray_address: Ray cluster address (``None``: start a local Ray instance).
-        execution: How steps run, never what they compute (same keys, results, checkpoints, datasets):
-            ``grouped`` (default) trains inside the worker process and evaluates all conditions of a
-            checkpoint in one task as soon as it exists (policy loaded once); ``per_step`` runs
-            ``lerobot-train`` as a subprocess and every evaluation as its own task (the earlier way).
-        dry_run: Print the plan (steps per kind, cached, cost estimate) and stop.
-        profile: Run nothing; print where the finished steps' time went (per kind and component).
-        fit_cost: Run nothing; refit the ``--dry-run`` cost model's constants from the finished steps'
-            timings and write them to ``study/cost_model.json``.
-        strict: Refuse to run (one ``error:`` line, before any work) when cached steps of the plan were
-            made by other code than the current (another source hash; see ``core/provenance.py``).
-        rerun_stale: Redo the cached steps made by other code, and every cached step that depends on one
-            (its inputs are remade); their old folders are kept as ``steps/<kind>/<key>.stale-<commit>``.
-        push_to_hub: After the report, push ``episodes.parquet`` and ``results.csv`` with a dataset card to the
-            Hugging Face dataset repo ``hub_repo_id`` (a token is checked before any work; an unreachable Hub
-            is one warning line, and the local results stay complete). Not done while steps have failed.
-        hub_repo_id: ``user/name`` of that dataset repo (required by ``push_to_hub``).
-        reuse_from: Other studies' folders whose finished steps this study uses where the keys (the inputs)
-            are the same, linked into ``steps/`` instead of run again (``study/run/reuse.py``): e.g. F3 and F5
-            reuse F1's seed-0 collections, trainings and single-factor evaluations.
         claims: The paper's claims this study tests (``claim_config.py``): the report decides each from its
             intervals (``claims.py``). None: the paper's factor ordering over ``factors``.
     """
@@ -469,32 +445,14 @@ class StudyConfig:
     collect: CollectSettings = field(default_factory=CollectSettings)
     train: TrainSettings = field(default_factory=TrainSettings)
     eval: EvalSettings = field(default_factory=EvalSettings)
-    executor: str = "local"
-    workers: int = 1
-    ray_address: str | None = None
-    execution: str = "grouped"
-    dry_run: bool = False
-    profile: bool = False
-    fit_cost: bool = False
-    strict: bool = False
-    rerun_stale: bool = False
-    push_to_hub: bool = False
-    hub_repo_id: str | None = None
-    reuse_from: list[str] = field(default_factory=list)
     claims: list[ClaimConfig] = field(default_factory=list)
 
     def __post_init__(self) -> None:
         self.methods = [m if isinstance(m, MethodConfig) else MethodConfig(**m) for m in self.methods]
         self.claims = [c if isinstance(c, ClaimConfig) else ClaimConfig(**c) for c in self.claims]
-        self.reuse_from = [absolute_path(folder) for folder in self.reuse_from]  # steps run elsewhere
         self.validate()
 
     # --- derived -----------------------------------------------------------------------------
-
-    @property
-    def inspects(self) -> bool:
-        """Whether this run only inspects the study (``dry_run``, ``profile``, ``fit_cost``): nothing runs."""
-        return self.dry_run or self.profile or self.fit_cost
 
     def trained_methods(self) -> list[MethodConfig]:
         """The methods the study trains (policy settings): they need the collections and trainings."""
@@ -554,16 +512,6 @@ class StudyConfig:
         self._validate_family_options()
         check_device("train.device", self.train.device)
         check_device("eval.device", self.eval.device)
-        if self.executor not in EXECUTORS:
-            raise ValueError(f"unknown executor {self.executor!r}; valid executors: {', '.join(EXECUTORS)}")
-        if self.execution not in EXECUTIONS:
-            raise ValueError(f"unknown execution {self.execution!r}; valid: {', '.join(EXECUTIONS)}")
-        if self.workers < 1:
-            raise ValueError(f"workers must be at least 1, got {self.workers}")
-        if self.strict and self.rerun_stale:
-            raise ValueError("strict=true refuses steps made by other code, rerun_stale=true redoes them: set one")
-        self._validate_hub()
-        check_reuse_from(self.reuse_from, self.out_dir)
         if min(self.n_train_envs) < 1 or len(set(self.n_train_envs)) != len(self.n_train_envs):
             raise ValueError(f"n_train_envs must be distinct positive numbers, got {self.n_train_envs}")
         if len(set(self.seeds)) != len(self.seeds):
@@ -573,16 +521,6 @@ class StudyConfig:
             raise ValueError("train.steps must be at least 1 (or set train.epochs)")
         for method in self.trained_methods():  # last: importing LeRobot's policy configs takes seconds
             check_policy(method)
-
-    def _validate_hub(self) -> None:
-        """A push names its dataset repo, checked with the other settings (the token is the runner's check)."""
-        if not self.push_to_hub:
-            return
-        if not self.hub_repo_id:
-            raise ValueError(
-                "push_to_hub=true needs --hub_repo_id=<user>/<name>, the Hugging Face dataset repo to push to"
-            )
-        check_hub_repo_id(self.hub_repo_id, "hub_repo_id")
 
     def _validate_conditions(self) -> None:
         """Factors apply to every task and are varied in training; a family's conditions need its tasks."""

@@ -38,6 +38,7 @@ from ...tasks import get_task, step_limit
 from ..run.checkpoint import GIVEN_CHECKPOINT, checkpoint_problems, local_folder, read_policy_config
 from ..run.executors import task_units
 from ..run.inputs import CollectInputs, EnvInputs, EvalInputs, TrainInputs
+from ..run.options import RunOptions
 from ..run.reuse import reusable_steps
 from ..run.steps import KINDS, TIMINGS, Step, epoch_frames, evaluated, is_done
 from .config import StudyConfig
@@ -257,11 +258,12 @@ def _work_seconds(plan: Plan, steps: list[Step], model: dict[str, Any]) -> float
     return sum(sum(step_cost(s, index, model)) for s in steps)
 
 
-def describe(cfg: StudyConfig, plan: Plan) -> str:
-    """The ``--dry-run`` text: steps per kind, how many are cached, the cost estimate."""
+def describe(cfg: StudyConfig, plan: Plan, options: RunOptions) -> str:
+    """The ``--dry-run`` text: steps per kind, how many are cached (here or in ``options.reuse_from``), the cost
+    estimate at ``options.execution``."""
     study_dir = Path(cfg.out_dir)
     lines = [f"study {cfg.name!r} in {study_dir}"]
-    reused = reusable_steps(plan.steps, study_dir, cfg.reuse_from)
+    reused = reusable_steps(plan.steps, study_dir, options.reuse_from)
     todo = [s for s in plan.steps if not is_done(s, study_dir) and s.key not in reused]
     for kind, total in plan.counts().items():
         cached = total - sum(1 for s in todo if s.kind == kind)
@@ -278,9 +280,9 @@ def describe(cfg: StudyConfig, plan: Plan) -> str:
     fitted = model.get("fitted_on", {})
     lines.append(
         f"  estimated wall time of the steps to run (cost model in study/plan/cost.py, fitted on the "
-        f"{fitted.get('study', '?')!r} study, {fitted.get('date', '?')}, execution {cfg.execution}):"
+        f"{fitted.get('study', '?')!r} study, {fitted.get('date', '?')}, execution {options.execution}):"
     )
-    for name, hours in estimate(plan, todo, cfg.execution, model).items():
+    for name, hours in estimate(plan, todo, options.execution, model).items():
         lines.append(f"    {name:40s} {hours:10.1f} h" if hours >= 1 else f"    {name:40s} {hours * 60:10.0f} min")
     if cfg.collect.other_quality:
         lines.append(
@@ -359,7 +361,9 @@ def fit_constants(plan: Plan, study_dir: str | Path) -> dict[str, Any]:
     return model
 
 
-def fit_cost_model(cfg: StudyConfig, plan: Plan, study_dir: str | Path, path: Path = COST_MODEL_FILE) -> str:
+def fit_cost_model(
+    cfg: StudyConfig, plan: Plan, study_dir: str | Path, options: RunOptions, path: Path = COST_MODEL_FILE
+) -> str:
     """Refit the constants from study ``cfg``'s finished steps, write them to ``path`` with where they were
     fitted, and return what changed and the model's estimate of the whole study next to its wall time. Only from
     a study rendered at the default quality: the model's frame costs are that quality's."""
@@ -376,8 +380,8 @@ def fit_cost_model(cfg: StudyConfig, plan: Plan, study_dir: str | Path, path: Pa
         "out_dir": str(cfg.out_dir),
         "commit": provenance.current().revision(short=True),
         "date": datetime.date.today().isoformat(),
-        "execution": run.get("execution", cfg.execution),
-        "workers": run.get("workers", cfg.workers),
+        "execution": run.get("execution", options.execution),
+        "workers": run.get("workers", options.workers),
         "wall_s": run.get("wall_s"),
     }
     atomic_write_json(path, model, indent=1, sort_keys=True)
@@ -389,6 +393,6 @@ def fit_cost_model(cfg: StudyConfig, plan: Plan, study_dir: str | Path, path: Pa
     cpu = whole[next(iter(PROFILES))] * 3600
     measured = f"{wall:.0f} s measured" if wall else "no measured wall time"
     lines.append(
-        f"  this study from scratch on {run.get('workers', cfg.workers)} workers: {cpu:.0f} s estimated, {measured}"
+        f"  this study from scratch on {run.get('workers', options.workers)} workers: {cpu:.0f} s estimated, {measured}"
     )
     return "\n".join(lines)

@@ -16,6 +16,7 @@ from ...families import family_of
 from ...protocol.sampling import SamplingOptions
 from ...scene.build import DEFAULT_QUALITY
 from ..run.checkpoint import local_folder, read_policy_config, training_dataset
+from ..run.options import RunOptions
 from .config import CollectSettings, EvalSettings, MethodConfig, StudyConfig
 
 DEFAULT_METHOD = "checkpoint"  # the method's name when the checkpoint's config names no policy type
@@ -152,10 +153,12 @@ class ProfileConfig:
             methods=[method],
             collect=_collect_settings(env.task_names[0], env.cameras, env.image_size, env.sampling, own_quality),
             eval=self.eval,
-            workers=self.workers,
-            dry_run=self.dry_run,
-            push_to_hub=self.push_to_hub,
-            hub_repo_id=self.hub_repo_id,
+        )
+
+    def options(self) -> RunOptions:
+        """How the profile's study runs (what its command line says)."""
+        return RunOptions(
+            workers=self.workers, dry_run=self.dry_run, push_to_hub=self.push_to_hub, hub_repo_id=self.hub_repo_id
         )
 
 

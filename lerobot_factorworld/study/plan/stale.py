@@ -17,8 +17,8 @@ from pathlib import Path
 
 from ...core import provenance
 from ...core.provenance import UNKNOWN, Provenance
+from ..run.options import RunOptions
 from ..run.steps import Step, is_done, provenance_of, read_result
-from .config import StudyConfig
 from .grid import Plan
 
 STALE_SUFFIX = ".stale-"  # a redone step's old folder: steps/<kind>/<key>.stale-<commit>
@@ -72,22 +72,22 @@ def stale_summary(stale: list[Stale], now: Provenance) -> str:
     return f"{len(stale)} cached {were} made by other code than the current, {now.name}: {counts} (e.g. {labels}{more})"
 
 
-def check_not_stale(cfg: StudyConfig, stale: list[Stale]) -> None:
+def check_not_stale(options: RunOptions, stale: list[Stale]) -> None:
     """``strict``: refuse (one line) when cached steps of the plan were made by other code."""
-    if cfg.strict and stale:
+    if options.strict and stale:
         raise ValueError(
             f"{stale_summary(stale, provenance.current())}; --strict=true refuses to mix them with steps of the "
             "current code: --rerun_stale=true redoes them, or choose another out_dir"
         )
 
 
-def provenance_warning(cfg: StudyConfig, plan: Plan, study_dir: Path, stale: list[Stale]) -> str | None:
+def provenance_warning(options: RunOptions, plan: Plan, study_dir: Path, stale: list[Stale]) -> str | None:
     """The one ``warning:`` line before a run: the cached steps made by other code and what happens to
     them, and whether the steps run now come from a tree with uncommitted changes; ``None`` when neither."""
     now = provenance.current()
     parts = []
     redo = {s.step.key for s in stale}
-    if stale and cfg.rerun_stale:
+    if stale and options.rerun_stale:
         also = [s for s in dependents(plan, redo) if is_done(s, study_dir)]
         parts.append(
             f"{stale_summary(stale, now)}; --rerun_stale=true: they and the {len(also)} cached step(s) depending "
@@ -95,7 +95,7 @@ def provenance_warning(cfg: StudyConfig, plan: Plan, study_dir: Path, stale: lis
         )
     elif stale:
         parts.append(f"{stale_summary(stale, now)}; --rerun_stale=true redoes them, --strict=true refuses")
-    to_run = any(not is_done(s, study_dir) for s in plan.steps) or (bool(stale) and cfg.rerun_stale)
+    to_run = any(not is_done(s, study_dir) for s in plan.steps) or (bool(stale) and options.rerun_stale)
     if now.clean is False and to_run:
         parts.append(
             f"the current code, {now.name}, has uncommitted changes: steps run now are not reproducible from a commit"
@@ -103,8 +103,8 @@ def provenance_warning(cfg: StudyConfig, plan: Plan, study_dir: Path, stale: lis
     return "warning: " + "; ".join(parts) if parts else None
 
 
-def warn_stale(cfg: StudyConfig, plan: Plan, study_dir: Path, stale: list[Stale]) -> None:
-    line = provenance_warning(cfg, plan, study_dir, stale)
+def warn_stale(options: RunOptions, plan: Plan, study_dir: Path, stale: list[Stale]) -> None:
+    line = provenance_warning(options, plan, study_dir, stale)
     if line:
         print(line, file=sys.stderr, flush=True)
 

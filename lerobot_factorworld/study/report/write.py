@@ -22,6 +22,7 @@ from pathlib import Path
 from ...core.io import atomic_write_text
 from ...core.settings import parse_config
 from ...families import family_of
+from ..plan.command import StudyCommand
 from ..plan.config import RUN_CONFIG_FILE, StudyConfig, write_run_config
 from ..plan.grid import Plan, make_plan
 from ..plan.profile import profile_markdown
@@ -145,12 +146,13 @@ def _config_next_to(results: Path) -> Path:
 
 
 def load_config(path: str | Path) -> StudyConfig:
-    """The study config a ``results.csv`` was made with (a YAML file as ``factorworld study`` reads it).
+    """The study grid a ``results.csv`` was made with (a YAML file as ``factorworld study`` reads it; its run
+    options, ``workers`` and the like, are read and dropped).
 
     Its ``reuse_from`` is left out: where finished steps were linked from is how a study ran on one machine,
     not what it computed (a step's key is its inputs), and those folders need not exist where a report is
     regenerated."""
-    return parse_config(StudyConfig, [f"--config_path={path}", f"--{REUSE_SETTING}=[]"], "study")
+    return parse_config(StudyCommand, [f"--config_path={path}", f"--{REUSE_SETTING}=[]"], "study").grid()
 
 
 def check_study_name(rows: Sequence[dict], name: str, results: Path) -> None:
