@@ -320,17 +320,17 @@ def test_the_committed_quick_report_html_is_what_its_results_csv_regenerates(tmp
 
 @pytest.fixture
 def drawn_intervals(monkeypatch):
-    """Every interval the PNG plots draw, per plot: [(xs, intervals)] of each ``plots._intervals`` call."""
+    """Every interval the PNG plots draw, per plot: [(xs, intervals)] of each ``plots.draw_intervals`` call."""
     from lerobot_factorworld.study.report import plots
 
     calls: dict[str, list] = {}
-    draw = plots._intervals
+    draw = plots.draw_intervals
 
     def record(ax, xs, found, horizontal=False, **style):
         calls.setdefault(record.plot, []).append((list(xs), [tuple(f) for f in found]))
         return draw(ax, xs, found, horizontal, **style)
 
-    monkeypatch.setattr(plots, "_intervals", record)
+    monkeypatch.setattr(plots, "draw_intervals", record)
     for name, plotter in list(plots.PLOTTERS.items()):
 
         def traced(rows, cfg, path, plotter=plotter, name=name):

@@ -11,6 +11,7 @@ from __future__ import annotations
 import itertools
 import json
 import logging
+import math
 import os
 import re
 from collections.abc import Callable
@@ -46,6 +47,11 @@ DEVICE_PATTERN = re.compile(r"cpu|mps|cuda(:\d+)?")
 def is_path_setting(name: str) -> bool:
     """A policy setting or ``lerobot-train`` flag that names a local file or folder."""
     return name.endswith(PATH_SUFFIXES)
+
+
+def _whole(value: float) -> float | int:
+    """``20.0`` -> ``20``: epochs as the config and the keys write them."""
+    return int(value) if float(value).is_integer() else value
 
 
 def absolute_path(value: str) -> str:
@@ -339,6 +345,9 @@ class TrainSettings:
         device: ``cpu`` or ``cuda``.
         extra_args: More ``lerobot-train`` flags, e.g. ``["--optimizer.lr=3e-4"]``; values of flags named
             ``*_path`` / ``*_root`` are made absolute (training runs in the step's folder).
+        curve_every: A learning curve: a checkpoint every this many epochs (needs ``epochs``; 0, the default:
+            none), each evaluated on the ``train`` condition as its own cached step, so P_T is measured against
+            training time (``curve.csv``, the report's "Learning curve"). In the training step's key when set.
     """
 
     steps: int = 1000
@@ -347,6 +356,14 @@ class TrainSettings:
     threads: int = 1
     device: str = "cpu"
     extra_args: list[str] = field(default_factory=list)
+    curve_every: float = 0
+
+    def curve_epochs(self) -> list[float]:
+        """The learning curve's checkpoints before the last, in nominal epochs (``curve_every`` apart)."""
+        if not self.curve_every or self.epochs is None:
+            return []
+        count = math.ceil(self.epochs / self.curve_every) - 1
+        return [_whole(self.curve_every * j) for j in range(1, count + 1)]
 
     def __post_init__(self) -> None:
         self.extra_args = resolve_arg_paths(list(self.extra_args))
@@ -517,6 +534,8 @@ class StudyConfig:
         if len(set(self.seeds)) != len(self.seeds):
             raise ValueError(f"seeds must be distinct, got {self.seeds}")
         self._validate_episodes()
+        if self.train.curve_every < 0 or (self.train.curve_every and self.train.epochs is None):
+            raise ValueError("train.curve_every is a number of epochs (0: no learning curve) and needs train.epochs")
         if self.train.epochs is None and self.train.steps < 1:
             raise ValueError("train.steps must be at least 1 (or set train.epochs)")
         for method in self.trained_methods():  # last: importing LeRobot's policy configs takes seconds

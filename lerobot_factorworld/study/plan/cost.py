@@ -275,6 +275,12 @@ def describe(cfg: StudyConfig, plan: Plan, options: RunOptions) -> str:
         f"conditions: train + {len(cfg.shifted_factors())} factors + {len(cfg.pair_conditions())} pairs"
         + (f" + {len(cfg.family_conditions())} language" if cfg.family_conditions() else "")
         + f"; radius runs: {len(cfg.radius_variants())}"
+        + (
+            f"; learning curve: a checkpoint every {cfg.train.curve_every:g} epochs, {len(plan.curve_points())} "
+            "more evaluations on train"
+            if plan.curve_points()
+            else ""
+        )
     )
     model = load_model()
     fitted = model.get("fitted_on", {})

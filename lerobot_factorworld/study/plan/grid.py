@@ -21,6 +21,7 @@ from ..run.steps import RUN, Step, versions
 from .config import RADII_M, MethodConfig, StudyConfig, map_arg_paths, map_policy_paths
 
 DEFAULT_WIDTHS = "default"
+CURVE_EPOCHS = "epochs"  # the label (``Step.meta``) of a learning curve's evaluation: its checkpoint's epochs
 
 
 @dataclass(frozen=True)
@@ -32,6 +33,15 @@ class Plan:
 
     def counts(self) -> Counter:
         return Counter(s.kind for s in self.steps)
+
+    def evaluations(self) -> list[Step]:
+        """The grid's evaluations (``results.csv``'s rows): every checkpoint that training ends with, on every
+        condition; a learning curve's earlier checkpoints are :meth:`curve_points`."""
+        return [s for s in self.of_kind("eval") if CURVE_EPOCHS not in s.meta]
+
+    def curve_points(self) -> list[Step]:
+        """The learning curve's evaluations of earlier checkpoints (``train.curve_every``), on ``train``."""
+        return [s for s in self.of_kind("eval") if CURVE_EPOCHS in s.meta]
 
     def given_evaluations(self) -> list[tuple[str, str, EnvInputs]]:
         """(method name, checkpoint, environments) of every given checkpoint's evaluation step (what
@@ -90,7 +100,8 @@ def _method_steps(
         ]
         epochs_over = method.epochs_over if extras and method.epochs_over != OWN_FRAMES else None
         train = _train_step(cfg, method.policy, seed, collect, labels, extras, epochs_over)
-        return [*extras, train, *(_eval_step(cfg, c, train, collect, labels) for c in conditions)]
+        curve = [_curve_step(cfg, epochs, train, collect, labels) for epochs in cfg.train.curve_epochs()]
+        return [*extras, train, *(_eval_step(cfg, c, train, collect, labels) for c in conditions), *curve]
     if seed != cfg.seeds[0]:
         return []
     env = CollectInputs.from_dict(collect.inputs).environments(method.obs)
@@ -157,6 +168,7 @@ def _train_step(
         extra_args=tuple(keyed_args(t.extra_args)),
         versions=versions(),
         epochs_over=epochs_over,
+        curve_every=t.curve_every or None,  # no curve: left out of the key, as always
     )
     run = {"policy": policy, "extra_args": list(t.extra_args)}
     return Step("train", inputs.to_dict(), (collect.key, *(e.key for e in extras)), {**labels, RUN: run})
@@ -169,6 +181,14 @@ def _eval_step(cfg: StudyConfig, condition: str, train: Step, collect: Step, lab
     run = {"threads": cfg.eval.threads, RECORD_SETTING: cfg.eval.record_episodes}
     inputs = _eval_inputs(cfg, condition, labels["task"])
     return Step("eval", inputs.to_dict(), (train.key, collect.key), {**labels, "condition": condition, RUN: run})
+
+
+def _curve_step(cfg: StudyConfig, epochs: float, train: Step, collect: Step, labels: dict) -> Step:
+    """P_T of the learning curve's checkpoint at ``epochs`` (nominal): the ``train`` condition's evaluation with
+    that checkpoint, a step of its own (the curve's last point is the grid's own ``train`` evaluation)."""
+    step = _eval_step(cfg, TRAIN_SUITE, train, collect, labels)
+    inputs = replace(_eval_inputs(cfg, TRAIN_SUITE, labels["task"]), checkpoint_epochs=epochs)
+    return Step("eval", inputs.to_dict(), step.deps, {**step.meta, CURVE_EPOCHS: epochs})
 
 
 def _given_eval_step(

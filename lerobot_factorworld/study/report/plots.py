@@ -67,7 +67,7 @@ DRAWN_WHEN = {  # the plots drawn only in some studies with data for them
 }
 
 
-def _plt():
+def pyplot():
     # Deliberately here: matplotlib takes about a second to import and only drawing needs it (not
     # planning, running steps, or a report without rows).
     import matplotlib  # noqa: PLC0415
@@ -78,7 +78,7 @@ def _plt():
     return plt
 
 
-def _intervals(ax, xs: Sequence[float], found: Sequence[Interval], horizontal: bool = False, **style) -> None:
+def draw_intervals(ax, xs: Sequence[float], found: Sequence[Interval], horizontal: bool = False, **style) -> None:
     """Points at their estimates with bars from each interval's low to its high end, exact where the interval
     is not centred on its point (NaN intervals draw no bar)."""
     points = [f[0] for f in found]
@@ -101,7 +101,7 @@ def plot_gap_vs_n(rows, cfg: StudyConfig, path: Path) -> bool:
     if not found:  # fewer than two N
         return False
     labels = list(dict.fromkeys(label for g in found.values() for label in g.gaps))
-    plt = _plt()
+    plt = pyplot()
     cols = min(4, len(labels))
     nrows = math.ceil(len(labels) / cols)
     fig, axes = plt.subplots(nrows, cols, figsize=(3.2 * cols, 2.6 * nrows), sharey=True, squeeze=False)
@@ -110,7 +110,7 @@ def plot_gap_vs_n(rows, cfg: StudyConfig, path: Path) -> bool:
     for ax, label in zip(axes.flat, labels):
         for method, g in found.items():
             if label in g.gaps:
-                _intervals(ax, [n * shift[method] for n in g.ns], g.gaps[label], label=method)
+                draw_intervals(ax, [n * shift[method] for n in g.ns], g.gaps[label], label=method)
         ax.set_title(label, fontsize=9)
         ax.set_xscale("log")
         ax.minorticks_off()
@@ -121,7 +121,7 @@ def plot_gap_vs_n(rows, cfg: StudyConfig, path: Path) -> bool:
     axes[0][0].set_ylabel("gap P_T - P_F")
     axes[0][0].legend(fontsize=7)
     fig.supxlabel("training environments N (95% bootstrap intervals)")
-    return _save(fig, path)
+    return save_figure(fig, path)
 
 
 def plot_gap_vs_radius(rows, cfg: StudyConfig, path: Path) -> bool:
@@ -129,7 +129,7 @@ def plot_gap_vs_radius(rows, cfg: StudyConfig, path: Path) -> bool:
     if not cfg.radius_factors or not stats:
         return False
     slopes = radius_slopes(rows, cfg.radius_factors)
-    plt = _plt()
+    plt = pyplot()
     fig, ax = plt.subplots(figsize=(5.5, 3.4))
     for method in cfg.methods:
         for factor in cfg.radius_factors:
@@ -153,7 +153,7 @@ def plot_gap_vs_radius(rows, cfg: StudyConfig, path: Path) -> bool:
     ax.set_xlabel("radius (m)")
     ax.set_ylabel("gap P_T - P_F (± SE)")
     ax.legend(fontsize=7, title=f"slope per {RADIUS_STEP_M:g} m, 95% bootstrap", title_fontsize=7)
-    return _save(fig, path)
+    return save_figure(fig, path)
 
 
 def plot_pairs(rows, cfg: StudyConfig, path: Path) -> bool:
@@ -165,13 +165,13 @@ def plot_pairs(rows, cfg: StudyConfig, path: Path) -> bool:
     boot = pair_summary(rows, method, PAPER_PAIR_TOLERANCE)
     if not names or boot is None:
         return False
-    plt = _plt()
+    plt = pyplot()
     fig, axes = plt.subplots(1, 2, figsize=(10, 0.32 * len(names) + 1.6), sharey=True)
     ys = list(range(len(names)))
     nan = (math.nan, math.nan, math.nan)
     for offset, (label, found) in zip((-0.15, 0.15), (("per cell", boot.per_cell), ("pooled", boot.pooled))):
         values = [tuple(100 * v for v in found.get(p, nan)) for p in names]
-        _intervals(axes[0], [y + offset for y in ys], values, horizontal=True, label=label, ms=4)
+        draw_intervals(axes[0], [y + offset for y in ys], values, horizontal=True, label=label, ms=4)
     for edge in (-100 * PAPER_PAIR_TOLERANCE, 100 * PAPER_PAIR_TOLERANCE):
         axes[0].axvline(edge, color="grey", lw=0.5, ls="--")
     axes[0].axvline(0, color="grey", lw=0.5)
@@ -185,7 +185,7 @@ def plot_pairs(rows, cfg: StudyConfig, path: Path) -> bool:
     axes[0].set_yticks(ys, names, fontsize=7)
     axes[0].invert_yaxis()
     fig.suptitle(f"pairs ({method}), mean over tasks and N; no point: the harder factor never succeeded", fontsize=8)
-    return _save(fig, path)
+    return save_figure(fig, path)
 
 
 def plot_methods(rows, cfg: StudyConfig, path: Path) -> bool:
@@ -198,18 +198,18 @@ def plot_methods(rows, cfg: StudyConfig, path: Path) -> bool:
     factors = sorted(
         dict.fromkeys(f for intervals in found.values() for f in intervals), key=lambda f: ranks.get(f, math.inf)
     )
-    plt = _plt()
+    plt = pyplot()
     fig, ax = plt.subplots(figsize=(0.55 * len(factors) * max(1, len(found)) / 2 + 3.5, 3.2))
     width = 0.6 / len(found)
     nan = (math.nan, math.nan, math.nan)
     for j, (method, intervals) in enumerate(found.items()):
         xs = [i + (j - (len(found) - 1) / 2) * width for i in range(len(factors))]
-        _intervals(ax, xs, [intervals.get(f, nan) for f in factors], label=method, ls="none", ms=5)
+        draw_intervals(ax, xs, [intervals.get(f, nan) for f in factors], label=method, ls="none", ms=5)
     ax.set_xticks(range(len(factors)), factors, rotation=30, fontsize=7)
     ax.set_ylabel("gap (mean over tasks and N)\n95% bootstrap interval", fontsize=8)
     ax.axhline(0, color="grey", lw=0.5)
     ax.legend(fontsize=7)
-    return _save(fig, path)
+    return save_figure(fig, path)
 
 
 def plot_ordering_per_task(rows, cfg: StudyConfig, path: Path) -> bool:
@@ -223,7 +223,7 @@ def plot_ordering_per_task(rows, cfg: StudyConfig, path: Path) -> bool:
     pooled = factor_gap_bootstrap(rows, method, factors)
     ranks = rank_hardest_first(dict(zip(pooled.names, pooled.point.tolist())))
     shown = sorted(dict.fromkeys(f for b in orderings.values() for f in b.names), key=lambda f: ranks.get(f, math.inf))
-    plt = _plt()
+    plt = pyplot()
     fig, ax = plt.subplots(figsize=(0.5 * len(shown) * len(orderings) / 2 + 3.5, 3.2))
     width = 0.7 / len(orderings)
     nan = (math.nan, math.nan, math.nan)
@@ -232,12 +232,12 @@ def plot_ordering_per_task(rows, cfg: StudyConfig, path: Path) -> bool:
         own = rank_hardest_first({f: v[0] for f, v in intervals.items()})
         xs = [i + (j - (len(orderings) - 1) / 2) * width for i in range(len(shown))]
         order = " > ".join(sorted(own, key=own.get)[:3])
-        _intervals(ax, xs, [intervals.get(f, nan) for f in shown], label=f"{task} ({order}, ...)", ls="none", ms=5)
+        draw_intervals(ax, xs, [intervals.get(f, nan) for f in shown], label=f"{task} ({order}, ...)", ls="none", ms=5)
     ax.set_xticks(range(len(shown)), shown, rotation=30, fontsize=7)
     ax.set_ylabel("gap (mean over N)\n95% bootstrap interval", fontsize=8)
     ax.axhline(0, color="grey", lw=0.5)
     ax.legend(fontsize=7, title=f"{method}: each task's hardest factors", title_fontsize=7)
-    return _save(fig, path)
+    return save_figure(fig, path)
 
 
 def plot_success_rates(rows, cfg: StudyConfig, path: Path) -> bool:
@@ -247,7 +247,7 @@ def plot_success_rates(rows, cfg: StudyConfig, path: Path) -> bool:
     conditions = [TRAIN_SUITE, *cfg.factors]
     panels = [(m.name, t) for m in cfg.methods for t in cfg.tasks if any(k[:2] == (m.name, t) for k in pooled)]
     ns = [n for n in cfg.n_train_envs if any(k[2] == n for k in pooled)]
-    plt = _plt()
+    plt = pyplot()
     cols = min(3, len(panels))
     nrows = math.ceil(len(panels) / cols)
     fig, axes = plt.subplots(
@@ -262,7 +262,7 @@ def plot_success_rates(rows, cfg: StudyConfig, path: Path) -> bool:
                 k, total, low, high = pooled[(method, task, n, conditions[i])]
                 found.append((k / total, low, high))
             xs = [i + (j - (len(ns) - 1) / 2) * width for i in shown]
-            _intervals(ax, xs, found, label=f"N = {n}", ls="none", ms=4)
+            draw_intervals(ax, xs, found, label=f"N = {n}", ls="none", ms=4)
         ax.set_xticks(range(len(conditions)), ["original" if c == TRAIN_SUITE else c for c in conditions])
         ax.tick_params(axis="x", labelrotation=35, labelsize=7)
         ax.set_title(f"{method}, {task}", fontsize=9)
@@ -271,17 +271,17 @@ def plot_success_rates(rows, cfg: StudyConfig, path: Path) -> bool:
         ax.axis("off")
     axes[0][0].set_ylabel("success rate (pooled over seeds)\n95% interval", fontsize=8)
     axes[0][0].legend(fontsize=7)
-    return _save(fig, path)
+    return save_figure(fig, path)
 
 
 def _nz(v: float) -> float:
     return 0.0 if v is None or math.isnan(v) else v
 
 
-def _save(fig, path: Path) -> bool:
+def save_figure(fig, path: Path) -> bool:
     fig.tight_layout()
     fig.savefig(path, dpi=110)
-    _plt().close(fig)
+    pyplot().close(fig)
     return True
 
 

@@ -26,14 +26,16 @@ from ..plan.command import StudyCommand
 from ..plan.config import RUN_CONFIG_FILE, StudyConfig, write_run_config
 from ..plan.grid import Plan, make_plan
 from ..plan.profile import profile_markdown
+from ..results.curve import CURVE_FILE, curve_rows, read_curve, write_curve
 from ..results.episodes import EPISODES_FILE, episode_rows, write_episodes
 from ..results.rows import RESULTS_FILE, finished_evaluations, read_results, result_rows, write_results
 from ..run.recording import VIDEOS_DIR
 from ..run.steps import STEPS_DIR
+from .curve_report import CURVE_PLOT, curve_section, plot_curve
 from .episode_videos import MANIFEST, collect_videos
 from .family_report import FamilyReport, report_of
 from .html_report import write_html_report
-from .markdown import REPORT_FILE, decide_claims, render
+from .markdown import FAMILY_DETAILS, REPORT_FILE, decide_claims, render
 from .plots import write_plots
 
 PUBLISHED_CONFIG = "config.yaml"  # the study's config, committed next to its results.csv (docs/results/<study>/)
@@ -55,9 +57,11 @@ def write_report(cfg: StudyConfig, plan: Plan, study_dir: str | Path, command: s
     write_episodes(episode_rows(cfg, evaluations, study_dir), study_dir / EPISODES_FILE)
     for family in families_of(cfg):
         family.write_report_files(cfg=cfg, evaluations=evaluations, study_dir=study_dir)
+    if plan.curve_points():
+        write_curve(curve_rows(cfg, plan, study_dir), study_dir / CURVE_FILE)
     collect_videos(evaluations, study_dir)  # the recorded episodes, for report.html's paired viewer
     timing = profile_markdown(plan, study_dir)  # last: it is about the run, not the results
-    report, plots = render_report(cfg, read_results(csv_path), study_dir, command, len(plan.of_kind("eval")), timing)
+    report, plots = render_report(cfg, read_results(csv_path), study_dir, command, len(plan.evaluations()), timing)
     return csv_path, report, plots
 
 
@@ -75,9 +79,13 @@ def render_report(
     plots = write_plots(rows, cfg, out_dir)
     verdicts = decide_claims(cfg, rows)  # once, for both reports
     families = families_of(cfg)
+    (out_dir / CURVE_PLOT).unlink(missing_ok=True)
+    curve = read_curve(out_dir / CURVE_FILE) if cfg.train.curve_every and (out_dir / CURVE_FILE).is_file() else []
+    curve_lines = curve_section(curve, plot_curve(curve, out_dir / CURVE_PLOT)) if curve else []
 
     def family_sections(part: str) -> list[str]:
-        return [
+        own = curve_lines if part == FAMILY_DETAILS else []  # the learning curve, a breakdown of P_T
+        return own + [
             line
             for family in families
             for line in family.report_sections(cfg=cfg, rows=rows, study_dir=out_dir, part=part)
@@ -124,6 +132,9 @@ def regenerate_report(
         shutil.copytree(videos, out / VIDEOS_DIR, dirs_exist_ok=True)
     if not (out / RUN_CONFIG_FILE).is_file() or config.resolve() != (out / RUN_CONFIG_FILE).resolve():
         _publish_config(config, out / PUBLISHED_CONFIG)
+    for name in [CURVE_FILE] if cfg.train.curve_every else []:
+        if (results.parent / name).is_file():
+            _copy(results.parent / name, out / name)
     for family in families_of(cfg):
         for name in family.report_files:
             if (results.parent / name).is_file():
@@ -132,7 +143,7 @@ def regenerate_report(
                 (out / name).unlink(missing_ok=True)  # a stale copy would be read as this study's
     command = f"factorworld {REPORT_COMMAND} --results={RESULTS_FILE}"
     timing = profile_markdown(plan, out) if (out / STEPS_DIR).is_dir() else []
-    return render_report(cfg, rows, out, command, len(plan.of_kind("eval")), timing or [NO_TIMINGS, ""])
+    return render_report(cfg, rows, out, command, len(plan.evaluations()), timing or [NO_TIMINGS, ""])
 
 
 def _config_next_to(results: Path) -> Path:
@@ -165,7 +176,7 @@ def check_study_name(rows: Sequence[dict], name: str, results: Path) -> None:
 def check_rows_planned(rows: Sequence[dict], plan: Plan, results: Path, config: Path) -> None:
     """Refuse rows the config would not have made (another grid under the same study name): every row's cell
     and condition must be one of the plan's evaluations, or the report would describe a grid that never ran."""
-    planned = {_cell(step.meta) for step in plan.of_kind("eval")}
+    planned = {_cell(step.meta) for step in plan.evaluations()}
     unplanned = [_cell(row) for row in rows if _cell(row) not in planned]
     if unplanned:
         method, task, n, seed, widths, condition = unplanned[0]

@@ -85,7 +85,7 @@ class Evaluation:
 
 def finished_evaluations(plan: Plan, study_dir: str | Path) -> list[Evaluation]:
     """Every finished evaluation of ``plan``, in plan order."""
-    return [Evaluation(s, read_result(s, study_dir)) for s in plan.of_kind("eval") if is_done(s, study_dir)]
+    return [Evaluation(s, read_result(s, study_dir)) for s in plan.evaluations() if is_done(s, study_dir)]
 
 
 def result_rows(cfg: StudyConfig, evaluations: Sequence[Evaluation]) -> list[dict]:

@@ -162,7 +162,7 @@ EPOCHS_OVER = (OWN_FRAMES, MERGED_FRAMES)
 class TrainInputs:
     """One ``lerobot-train`` run of a method on a dataset."""
 
-    OPTIONAL: ClassVar[frozenset[str]] = frozenset({"epochs_over"})
+    OPTIONAL: ClassVar[frozenset[str]] = frozenset({"epochs_over", "curve_every"})
 
     policy: Mapping[str, Any]  # path-like settings naming a file replaced by its content hash
     seed: int
@@ -174,6 +174,7 @@ class TrainInputs:
     extra_args: tuple[str, ...]
     versions: Mapping[str, str]
     epochs_over: str | None = None  # "merged", or None (the task's own frames; not in the key)
+    curve_every: float | None = None  # epochs between the learning curve's checkpoints; None: no curve, not in the key
 
     def to_dict(self) -> dict[str, Any]:
         out = {f.name: getattr(self, f.name) for f in fields(self)}
@@ -191,7 +192,9 @@ class EvalInputs:
     its dataset gives the environments) or a given one (``checkpoint``, the content hash of its files, and
     ``environments``; the step has no dependency)."""
 
-    OPTIONAL: ClassVar[frozenset[str]] = frozenset({"n_test_envs", "checkpoint", "environments", "batch_size"})
+    OPTIONAL: ClassVar[frozenset[str]] = frozenset(
+        {"n_test_envs", "checkpoint", "environments", "batch_size", "checkpoint_epochs"}
+    )
 
     condition: str
     episodes: int
@@ -205,12 +208,17 @@ class EvalInputs:
     # Vectorised environments when more than one: a batch of frames changes the actions' last bits. None: one
     # at a time, left out of the key, so every evaluation run one at a time keeps the key it always had.
     batch_size: int | None = None
+    # A learning curve's checkpoint of the training, in nominal epochs (``TrainSettings.curve_every``); None: the
+    # last checkpoint (not in the key, as always)
+    checkpoint_epochs: float | None = None
 
     def __post_init__(self) -> None:
         if self.batch_size is not None and self.batch_size < 2:
             raise ValueError(f"an evaluation's batch_size is None (one at a time) or at least 2, not {self.batch_size}")
         if (self.condition == TRAIN_SUITE) != (self.n_test_envs is None):
             raise ValueError(f"n_test_envs is set for every shifted condition and only for them ({self.condition})")
+        if self.checkpoint_epochs is not None and (self.condition != TRAIN_SUITE or self.checkpoint is not None):
+            raise ValueError("a learning curve's checkpoint is evaluated on the train condition of a trained policy")
         if (self.checkpoint is None) != (self.environments is None):
             raise ValueError("a given checkpoint's evaluation names both its checkpoint and its environments")
         if isinstance(self.environments, Mapping):  # read back from a stored step

@@ -19,6 +19,7 @@ import contextlib
 import contextvars
 import functools
 import hashlib
+import itertools
 import json
 import math
 import os
@@ -390,6 +391,29 @@ def epoch_frames(inputs: TrainInputs, frames: list[int]) -> int:
     return sum(frames) if inputs.epochs_over == MERGED_FRAMES else frames[0]
 
 
+def curve_saves(inputs: TrainInputs, frames: int, steps: int) -> dict[str, int]:
+    """The learning curve's checkpoints before the last, ``{nominal epochs: gradient step}``: LeRobot saves every
+    ``save_freq`` steps, so checkpoint ``j`` is at ``j * ceil(curve_every * frames / batch_size)`` steps, at most a
+    batch past ``j * curve_every`` epochs (``curve.csv`` states its steps and exact epochs)."""
+    if not inputs.curve_every:
+        return {}
+    every = max(1, math.ceil(inputs.curve_every * frames / inputs.batch_size))
+    saves = {}
+    for j in itertools.count(1):
+        if j * every >= steps or j * inputs.curve_every >= inputs.epochs:
+            return saves
+        epochs = j * inputs.curve_every
+        saves[str(int(epochs) if float(epochs).is_integer() else epochs)] = j * every
+
+
+def curve_checkpoint(train_folder: Path, saved_at: int) -> Path:
+    """The checkpoint LeRobot saved at gradient step ``saved_at`` (its folder is the zero-padded step)."""
+    for folder in (train_folder / TRAIN_DIR / "checkpoints").iterdir():
+        if folder.name.isdigit() and int(folder.name) == saved_at:
+            return folder / "pretrained_model"
+    raise FileNotFoundError(f"no checkpoint of step {saved_at} in {train_folder / TRAIN_DIR / 'checkpoints'}")
+
+
 def _run_train(step: Step, folder: Path, deps: list[Path]) -> dict[str, Any]:
     timings, execution = _current()
     datasets = [read_result(d) for d in deps if d.parent.name == "collect"]  # the task's own first
@@ -397,7 +421,9 @@ def _run_train(step: Step, folder: Path, deps: list[Path]) -> dict[str, Any]:
     inputs = TrainInputs.from_dict(step.inputs)
     policy = step.run.get("policy", inputs.policy)  # absolute paths; the key holds their content hashes
     extra_args = step.run.get("extra_args", list(inputs.extra_args))
-    steps = train_steps(inputs, epoch_frames(inputs, [d["frames"] for d in datasets]))
+    frames = epoch_frames(inputs, [d["frames"] for d in datasets])
+    steps = train_steps(inputs, frames)
+    curve = curve_saves(inputs, frames, steps)
     if len(datasets) > 1:
         with timings.span("merge"):
             data = _merged_training_data(datasets, folder, step.key)
@@ -420,7 +446,7 @@ def _run_train(step: Step, folder: Path, deps: list[Path]) -> dict[str, Any]:
         f"--batch_size={inputs.batch_size}",
         f"--seed={inputs.seed}",
         *loader_args(loaders),
-        f"--save_freq={steps}",
+        f"--save_freq={min(curve.values(), default=steps)}",  # the curve's first checkpoint; then every as many
         f"--log_freq={max(1, steps // 10)}",
         "--wandb.enable=false",
         f"--output_dir={out}",
@@ -441,7 +467,10 @@ def _run_train(step: Step, folder: Path, deps: list[Path]) -> dict[str, Any]:
     timings.update(logged)
     # what is left: process start and imports (subprocess), dataset and policy set-up, checkpoint saving
     timings.add("startup_save", time.perf_counter() - start - sum(logged.values()) - timings.seconds.get("imports", 0))
-    return {"checkpoint": str(checkpoint), "steps": steps}
+    result = {"checkpoint": str(checkpoint), "steps": steps}
+    if curve:
+        result["curve"] = curve
+    return result
 
 
 def loader_args(workers: int) -> list[str]:
@@ -571,7 +600,16 @@ def _run_eval(step: Step, folder: Path, deps: list[Path]) -> dict[str, Any]:
     else:  # trained on a dataset, whose own environments are the training condition
         collect_folder = _dep_of_kind(deps, "collect")
         collect_inputs = CollectInputs.from_dict(json.loads((collect_folder / INPUTS_FILE).read_text())["inputs"])
-        checkpoint = read_result(_dep_of_kind(deps, "train"))["checkpoint"]
+        train_folder = _dep_of_kind(deps, "train")
+        trained = read_result(train_folder)
+        checkpoint = trained["checkpoint"]
+        if inputs.checkpoint_epochs is not None:  # a learning curve's earlier checkpoint
+            saved_at = trained.get("curve", {}).get(str(inputs.checkpoint_epochs))
+            if saved_at is None:
+                raise RuntimeError(
+                    f"the training saved no checkpoint at {inputs.checkpoint_epochs} epochs ({train_folder})"
+                )
+            checkpoint = str(curve_checkpoint(train_folder, saved_at))
         env_cfg = eval_env_config(collect_inputs, read_result(collect_folder)["root"], inputs)
     task = env_cfg.task_names[0]
     configs = env_cfg.suites(task)[inputs.condition]

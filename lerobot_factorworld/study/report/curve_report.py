@@ -1,0 +1,70 @@
+"""The report's "Learning curve" section and ``learning_curve.png`` from ``curve.csv`` (``train.curve_every``):
+P_T against training epochs per method and task, pooled over N and seeds, each point with its Wilson 95%
+interval, so a training budget is chosen from a measured curve, not a guess."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+from ..results.curve import CURVE_FILE, pooled_curve
+from .markdown import ci
+from .plots import draw_intervals, pyplot, save_figure
+
+CURVE_PLOT = "learning_curve.png"
+CURVE_CAPTION = (
+    "P_T (success on the training environments) against training epochs, per method and task, pooled over N and "
+    f"seeds; error bars: the Wilson 95% intervals of the *Learning curve* table (`{CURVE_FILE}`)."
+)
+
+
+def curve_section(rows: Sequence[dict[str, Any]], plotted: bool) -> list[str]:
+    """Markdown lines: the pooled curve as a table (one column per checkpoint), the figure under it."""
+    if not rows:
+        return []
+    pooled = pooled_curve(rows)
+    epochs = sorted({p["epochs"] for p in pooled})
+    lines = [
+        "## Learning curve",
+        "",
+        f"P_T of each checkpoint the training saved (`train.curve_every`), pooled over N and seeds with its Wilson "
+        f"95% interval (episodes of one checkpoint; the spread between seeds is not in it); per cell and seed in "
+        f"`{CURVE_FILE}`. The last column is the checkpoint the grid's evaluations use.",
+        "",
+        "| method | task | " + " | ".join(f"{e:g} epochs" for e in epochs) + " |",
+        "|---|---|" + "---|" * len(epochs),
+    ]
+    by_line: dict[tuple[str, str], dict[float, dict]] = {}
+    for point in pooled:
+        by_line.setdefault((point["method"], point["task"]), {})[point["epochs"]] = point
+    for (method, task), points in by_line.items():
+        cells = [
+            f"{p['success_rate']:.2f} {ci(p['ci_low'], p['ci_high'], 2, sign=False)} ({p['episodes']})"
+            if (p := points.get(e))
+            else ""
+            for e in epochs
+        ]
+        lines.append(f"| {method} | {task} | " + " | ".join(cells) + " |")
+    lines += ["", "Each cell: P_T [95% interval] (episodes)."]
+    if plotted:
+        lines += ["", f"![learning curve]({CURVE_PLOT})", "", f"*{CURVE_CAPTION}*"]
+    return [*lines, ""]
+
+
+def plot_curve(rows: Sequence[dict[str, Any]], path: Path) -> bool:
+    """One line per method and task: pooled P_T against epochs with its Wilson interval."""
+    pooled = pooled_curve(rows)
+    if not pooled:
+        return False
+    plt = pyplot()
+    fig, ax = plt.subplots(figsize=(5.5, 3.4))
+    for method, task in dict.fromkeys((p["method"], p["task"]) for p in pooled):
+        points = [p for p in pooled if (p["method"], p["task"]) == (method, task)]
+        found = [(p["success_rate"], p["ci_low"], p["ci_high"]) for p in points]
+        draw_intervals(ax, [p["epochs"] for p in points], found, label=f"{method}, {task}", ls="-", ms=4)
+    ax.set_xlabel("training epochs")
+    ax.set_ylabel("P_T (pooled), 95% interval", fontsize=8)
+    ax.set_ylim(-0.05, 1.05)
+    ax.legend(fontsize=7)
+    return save_figure(fig, path)

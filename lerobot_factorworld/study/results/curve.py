@@ -1,0 +1,108 @@
+"""``curve.csv``: a learning curve's points (``train.curve_every``), P_T of each checkpoint against its training
+epochs, one row per (method, task, N, seed, widths, checkpoint), the last point being the grid's own ``train``
+evaluation. Each row has its Wilson 95% interval; :func:`pooled_curve` sums a method's episodes over cells and
+seeds per checkpoint (the figure's and the report table's points)."""
+
+from __future__ import annotations
+
+import math
+from collections import defaultdict
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+from ...core.io import atomic_write_text, read_table
+from ...protocol.conditions import TRAIN_SUITE
+from ..metrics import wilson_interval
+from ..plan.config import StudyConfig
+from ..plan.grid import CURVE_EPOCHS, Plan
+from ..run.steps import is_done, read_result, step_folder
+from .rows import Evaluation as _Evaluation
+from .rows import csv_text, policy_of
+
+CURVE_FILE = "curve.csv"
+CURVE_COLUMNS = (
+    "study",
+    "method",
+    "policy",
+    "task",
+    "n_train_envs",
+    "seed",
+    "widths",
+    "epochs",  # nominal: a multiple of train.curve_every, or train.epochs for the last checkpoint
+    "steps",  # the gradient step the checkpoint was saved at
+    "episodes",
+    "successes",
+    "success_rate",
+    "ci_low",
+    "ci_high",
+    "step",  # key of the eval step
+)
+CELL = ("method", "task", "n_train_envs", "seed", "widths")
+
+
+def curve_rows(cfg: StudyConfig, plan: Plan, study_dir: str | Path) -> list[dict[str, Any]]:
+    """The finished points of every learning curve of ``plan`` (none without ``train.curve_every``), in the
+    plan's order with each cell's points by epochs."""
+    if not plan.curve_points():
+        return []
+    points = [(s, s.meta[CURVE_EPOCHS]) for s in plan.curve_points()]
+    last = int(cfg.train.epochs) if float(cfg.train.epochs or 0).is_integer() else cfg.train.epochs
+    points += [(s, last) for s in plan.evaluations() if s.meta["condition"] == TRAIN_SUITE and s.deps]
+    rows = []
+    for step, epochs in points:
+        if not is_done(step, study_dir):
+            continue
+        trained = read_result(step_folder(study_dir, "train", step.deps[0]))
+        saved_at = trained.get("curve", {}).get(str(epochs), trained["steps"])
+        rows.append(_row(cfg, _Evaluation(step, read_result(step, study_dir)), epochs, saved_at))
+    return sorted(rows, key=lambda r: ([str(r[c]) for c in CELL], r["epochs"]))
+
+
+def _row(cfg: StudyConfig, evaluation: _Evaluation, epochs: float, saved_at: int) -> dict[str, Any]:
+    meta, successes = evaluation.labels, evaluation.result["successes"]
+    k, n = sum(successes), len(successes)
+    low, high = wilson_interval(k, n)
+    return {
+        "study": cfg.name,
+        **{c: meta[c] for c in CELL[:1]},
+        "policy": policy_of(cfg, evaluation),
+        **{c: meta[c] for c in CELL[1:]},
+        "epochs": epochs,
+        "steps": saved_at,
+        "episodes": n,
+        "successes": k,
+        "success_rate": k / n if n else math.nan,
+        "ci_low": low,
+        "ci_high": high,
+        "step": evaluation.step.key,
+    }
+
+
+def write_curve(rows: Sequence[dict[str, Any]], path: Path) -> Path:
+    atomic_write_text(path, csv_text(rows, CURVE_COLUMNS))
+    return path
+
+
+def read_curve(path: str | Path) -> list[dict[str, Any]]:
+    """``curve.csv``'s rows with their numbers as numbers."""
+    integers = ("n_train_envs", "seed", "steps", "episodes", "successes")
+    return read_table(path, CURVE_COLUMNS, integers, ("epochs", "success_rate", "ci_low", "ci_high"))
+
+
+def pooled_curve(rows: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
+    """Per (method, task, epochs): the episodes and successes summed over N, seeds and widths, with the Wilson
+    95% interval of the pooled rate (episodes of one checkpoint are independent given it; seeds add variance
+    this interval does not hold, so it is a lower bound on the spread between seeds)."""
+    pooled: dict[tuple, list[int]] = defaultdict(lambda: [0, 0, 0])
+    for row in rows:
+        point = pooled[(row["method"], row["task"], float(row["epochs"]))]
+        point[0] += row["successes"]
+        point[1] += row["episodes"]
+        point[2] += 1
+    out = []
+    for (method, task, epochs), (k, n, cells) in sorted(pooled.items()):
+        low, high = wilson_interval(k, n)
+        out.append({"method": method, "task": task, "epochs": epochs, "cells": cells, "successes": k,
+                    "episodes": n, "success_rate": k / n if n else math.nan, "ci_low": low, "ci_high": high})  # fmt: skip
+    return out
