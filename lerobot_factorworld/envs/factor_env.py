@@ -41,10 +41,11 @@ Info:
 
 from __future__ import annotations
 
+import contextlib
 import copy
 import weakref
 from collections import OrderedDict
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import fields, replace
 from typing import Any, Protocol
 
@@ -135,6 +136,9 @@ class FactorWorldEnv(gym.Env):
         self._env_index = 0
         self.episode_observer: EpisodeObserver | None = None
         """Told of every reset and step of this env (e.g. an evaluation recording stages and frames); None: nobody."""
+        self.timer: Callable[[str], contextlib.AbstractContextManager[None]] = _untimed
+        """Wraps this env's scene compilation (``scene_compile``) and rendering (``render``), e.g. a study's
+        per-step timings (``core.timing.Timings.span``); the default times nothing."""
 
     # --- gymnasium API ------------------------------------------------------------------------
 
@@ -262,10 +266,11 @@ class FactorWorldEnv(gym.Env):
         scene = self._scenes.pop(key, None)
         if scene is None:
             args = (self.task_spec, factors, self.cameras, self.quality, self.image_size)
-            scene = self._family.make_scene(*args, content) if content is not None else None
-            scene = scene or CompiledScene(*args)  # the family's scene, or the plain Meta-World one
-            if self._lerobot is not None:
-                self._lerobot.prepare_scene(scene, factors)
+            with self.timer("scene_compile"):
+                scene = self._family.make_scene(*args, content) if content is not None else None
+                scene = scene or CompiledScene(*args)  # the family's scene, or the plain Meta-World one
+                if self._lerobot is not None:
+                    self._lerobot.prepare_scene(scene, factors)
             while len(self._scenes) >= self._scene_cache_size:
                 _, old = self._scenes.popitem(last=False)
                 old.close()
@@ -285,12 +290,14 @@ class FactorWorldEnv(gym.Env):
     def _observe(self, mw_obs: np.ndarray) -> dict[str, Any]:
         assert self._scene is not None
         if self._lerobot is not None:
-            obs = self._lerobot.observe(self._scene, mw_obs)
+            with self.timer("render"):  # LeRobot's observation is its one camera's frame
+                obs = self._lerobot.observe(self._scene, mw_obs)
             self._last_frame = obs["pixels"]
             return obs
         obs: dict[str, Any] = {"agent_pos": self._scene.proprioception(mw_obs)}
         if self.cameras:
-            obs["pixels"] = self._scene.render_all()
+            with self.timer("render"):
+                obs["pixels"] = self._scene.render_all()
             self._last_frame = obs["pixels"][self.cameras[0]]
         return obs
 
@@ -373,6 +380,10 @@ class EpisodeObserver(Protocol):
     def on_reset(self, env: FactorWorldEnv, seed: int | None, obs: dict, info: dict) -> None: ...
 
     def on_step(self, env: FactorWorldEnv, obs: dict, terminated: bool, truncated: bool, info: dict) -> None: ...
+
+
+def _untimed(name: str) -> contextlib.AbstractContextManager[None]:
+    return contextlib.nullcontext()
 
 
 def _close_scenes(scenes: OrderedDict[tuple, CompiledScene]) -> None:

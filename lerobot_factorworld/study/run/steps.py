@@ -585,12 +585,10 @@ def _run_eval(step: Step, folder: Path, deps: list[Path]) -> dict[str, Any]:
     timings, execution = _current()
     with timings.span("imports"):  # paid once per worker process: later steps find them imported
         # Deliberately here: torch and LeRobot's evaluation stack (seconds to import), only in the process
-        # that evaluates; the simulation too (timed below), which planning never needs.
+        # that evaluates (planning never needs them).
         import torch  # noqa: PLC0415
         from lerobot.envs.factory import make_env, make_env_pre_post_processors  # noqa: PLC0415
         from lerobot.scripts.lerobot_eval import eval_policy_all  # noqa: PLC0415
-
-        from ...envs.runtime import CompiledScene  # noqa: PLC0415
 
     inputs, run = EvalInputs.from_dict(step.inputs), step.run
     torch.set_num_threads(run.get("threads", 1))
@@ -629,10 +627,9 @@ def _run_eval(step: Step, folder: Path, deps: list[Path]) -> dict[str, Any]:
     with contextlib.ExitStack() as stack:
         for env in _factorworld_envs(envs):
             env.episode_observer = recorder  # stages, lengths and the first episodes' frames, from the env's hook
+            env.timer = timings.span  # scene compilation and rendering, from the env's own hook
             stack.enter_context(timings.wrap(env, "reset", "env_reset"))
             stack.enter_context(timings.wrap(env, "step", "env_step"))
-        stack.enter_context(timings.wrap(CompiledScene, "__init__", "scene_compile"))
-        stack.enter_context(timings.wrap(CompiledScene, "render_all", "render"))
         stack.enter_context(timings.wrap(policy, "select_action", "policy"))
         stack.enter_context(timings.span("rollout_other"))
         stack.enter_context(torch.no_grad())
