@@ -1,5 +1,5 @@
 """RT-1 policy cost per preset: parameters, training throughput, and ``select_action`` latency with and
-without token reuse.
+without token reuse; then both policies' training throughput at ``speed=default`` and ``speed=fast``.
 
 What is measured
     For each preset of ``RT1Config`` (``rt1``, ``lite0``, ``small``; see ``configuration_rt1.py``) one
@@ -26,16 +26,36 @@ What is measured
     round times one training segment and one ON and one OFF inference segment, the ON/OFF order
     alternating between rounds (ON OFF, OFF ON, ...). Training reports the median of the per-round rates;
     latency the median over all timed calls of that mode. On CUDA every timed region ends with
-    ``torch.cuda.synchronize()``. ``torch.set_num_threads`` is left at PyTorch's default.
+    ``torch.cuda.synchronize()``. ``torch.set_num_threads`` is left at PyTorch's default; on a machine shared
+    with other work, ``OMP_NUM_THREADS=1`` gives steadier rounds (two threads wait on each other when one is
+    descheduled).
 
     Batch sizes (training), CPU / CUDA: small 16 / 128, lite0 8 / 64, rt1 2 / 16 (``--batch-size`` overrides
     all). The ``rt1`` preset (FiLM-EfficientNet-B3 at 300 px, ~34M params) is slow on CPU, so it gets a
     small batch and few iterations; ``--skip-slow`` drops it.
 
-    python scripts/bench_policy.py [--presets small,lite0,rt1] [--skip-slow] [--device cpu|cuda]
-                                   [--rounds 3] [--train-steps N] [--infer-steps N] [--batch-size N] [--quick]
+Training speed setting (``speed``, ``policies/common/speed.py``)
+    Two policies, each built twice with identical weights, at ``speed=default`` (float32, today's
+    computation) and ``speed=fast`` (channels-last encoder input, bfloat16 autocast):
 
-``--quick`` is a smoke run (small preset only, 1 round, a few iterations). The last line printed is exactly
+    * ``bc conv``: ``BCPolicy`` with the paper's CNN, one 3x84x84 camera and a 4-D state (the env's hand
+      position and gripper), no augmentation; batch 32 on CPU (256 on CUDA), 8 (20) timed steps per round.
+      Its rate is in samples/s.
+    * ``rt1 <preset>``: ``RT1Policy`` at ``--speed-preset`` (default ``small``, the CPU preset), the inputs
+      above; the preset's batch and steps (table above). Its rate is in windows/s (windows of 6 frames).
+
+    One update is the training step above (forward in ``train()`` mode, backward, optimizer step:
+    bc's ``Adam`` at its preset learning rate, rt1's ``AdamW``); one untimed update per setting first, then
+    ``--rounds`` rounds, each timing both settings, their order alternating between rounds. Reported: the
+    median of the per-round rates per setting, and ``fast / default`` of those medians (``--batch-size`` and
+    ``--train-steps`` override these workloads too).
+
+    python scripts/bench_policy.py [--presets small,lite0,rt1] [--skip-slow] [--device cpu|cuda]
+                                   [--rounds 3] [--train-steps N] [--infer-steps N] [--batch-size N]
+                                   [--speed-preset small] [--quick]
+
+``--quick`` is a smoke run (small preset only, 1 round, a few iterations; the speed comparison at the small
+preset and the quick batch too). The last line printed is exactly
 ``ratio: <float>`` = the token-reuse speedup (latency OFF / latency ON) of the ``small`` preset, or of the
 first preset measured when ``small`` is not selected.
 """
@@ -56,16 +76,22 @@ _bench.add_repo_to_path()
 
 from lerobot.configs import FeatureType, PolicyFeature  # noqa: E402
 
+from lerobot_factorworld.policies.bc.configuration_bc import BCConfig  # noqa: E402
+from lerobot_factorworld.policies.bc.modeling_bc import BCPolicy  # noqa: E402
 from lerobot_factorworld.policies.common.language import LANGUAGE_EMBEDDING_KEY  # noqa: E402
+from lerobot_factorworld.policies.common.speed import SPEEDS  # noqa: E402
 from lerobot_factorworld.policies.rt1.configuration_rt1 import PRESETS, RT1Config  # noqa: E402
 from lerobot_factorworld.policies.rt1.modeling_rt1 import RT1Policy  # noqa: E402
 
 IMAGE_KEY = "observation.images.front"
 IMAGE_SHAPE = (3, 84, 84)
+STATE_KEY = "observation.state"
+STATE_DIM = 4  # the env's observation.state: hand x, y, z and gripper opening
 ACTION_DIM = 4
 LANGUAGE_DIM = 384
 FRAME_POOL = 16  # distinct inference frames cycled through (so no call sees the same input twice in a row)
 SLOW_PRESETS = ("rt1",)
+SPEED_POLICIES = ("bc", "rt1")  # the speed=default / speed=fast comparison, in this order
 DEFAULT_ORDER = ("small", "lite0", "rt1")
 
 
@@ -84,6 +110,7 @@ PLANS: dict[str, Plan] = {
     "rt1": Plan({"cpu": 2, "cuda": 16}, {"cpu": 2, "cuda": 10}, {"cpu": 6, "cuda": 60}),
 }
 QUICK = dict(rounds=1, batch=4, train_steps=2, infer_steps=8, warmup=6)
+BC_SPEED_PLAN = Plan({"cpu": 32, "cuda": 256}, {"cpu": 8, "cuda": 20}, {})  # bc conv's update (no inference here)
 
 
 @dataclass
@@ -107,14 +134,54 @@ class Result:
         return self.latency(False) / self.latency(True)
 
 
-def build_policy(preset: str, device: str) -> RT1Policy:
+@dataclass
+class SpeedResult:
+    """Training throughput of one policy at each ``speed`` value, per round."""
+
+    label: str  # "bc conv", "rt1 small"
+    unit: str  # "samples/s" (bc) or "windows/s" (rt1)
+    batch: int
+    steps: int  # timed updates per round and setting
+    rates: dict[str, list[float]] = field(default_factory=lambda: {speed: [] for speed in SPEEDS})
+
+    def rate(self, speed: str) -> float:
+        return statistics.median(self.rates[speed])
+
+    @property
+    def ratio(self) -> float:
+        return self.rate("fast") / self.rate("default")
+
+
+def build_policy(preset: str, device: str, speed: str = "default") -> RT1Policy:
     cfg = RT1Config(
         preset=preset,
         device=device,
         input_features={IMAGE_KEY: PolicyFeature(FeatureType.VISUAL, IMAGE_SHAPE)},
         output_features={"action": PolicyFeature(FeatureType.ACTION, (ACTION_DIM,))},
+        speed=speed,
     )
     return RT1Policy(cfg).to(device)
+
+
+def build_bc(device: str, speed: str) -> BCPolicy:
+    cfg = BCConfig(
+        device=device,
+        input_features={
+            IMAGE_KEY: PolicyFeature(FeatureType.VISUAL, IMAGE_SHAPE),
+            STATE_KEY: PolicyFeature(FeatureType.STATE, (STATE_DIM,)),
+        },
+        output_features={"action": PolicyFeature(FeatureType.ACTION, (ACTION_DIM,))},
+        speed=speed,
+    )
+    return BCPolicy(cfg).to(device)
+
+
+def bc_batch(batch_size: int, device: str) -> dict[str, torch.Tensor]:
+    return {
+        IMAGE_KEY: torch.rand(batch_size, *IMAGE_SHAPE, device=device),
+        STATE_KEY: torch.randn(batch_size, STATE_DIM, device=device),
+        "action": torch.rand(batch_size, ACTION_DIM, device=device) * 2 - 1,
+    }
 
 
 def train_batch(policy: RT1Policy, batch_size: int, device: str) -> dict[str, torch.Tensor]:
@@ -149,6 +216,44 @@ def workload(preset: str, args: argparse.Namespace, kind: str) -> tuple[int, int
         args.train_steps or plan.train_steps[kind],
         args.infer_steps or plan.infer_steps[kind],
     )
+
+
+def speed_workload(policy: str, args: argparse.Namespace, kind: str) -> tuple[int, int]:
+    """(batch size, timed updates per round and setting) of the speed comparison: ``bc`` or ``rt1``."""
+    if args.quick:
+        return QUICK["batch"], QUICK["train_steps"]
+    plan = BC_SPEED_PLAN if policy == "bc" else PLANS[args.speed_preset]
+    return args.batch_size or plan.batch[kind], args.train_steps or plan.train_steps[kind]
+
+
+def bench_speed(policy_name: str, args: argparse.Namespace, bar: tqdm) -> SpeedResult:
+    """Updates per second of ``bc`` (conv) or ``rt1`` (``--speed-preset``) at each ``speed``, rounds interleaved."""
+    device, clock = args.device, _bench.Clock(args.device)
+    batch_size, steps = speed_workload(policy_name, args, _bench.device_kind(device))
+    bc = policy_name == "bc"
+    label = "bc conv" if bc else f"rt1 {args.speed_preset}"
+    result = SpeedResult(label, "samples/s" if bc else "windows/s", batch_size, steps)
+    policies, optimizers = {}, {}
+    for speed in SPEEDS:
+        bar.set_postfix_str(f"{label} speed={speed}: building")
+        torch.manual_seed(args.seed)  # the same weights under every setting
+        policy = build_bc(device, speed) if bc else build_policy(args.speed_preset, device, speed)
+        optimizer_class = torch.optim.Adam if bc else torch.optim.AdamW  # each policy's optimizer preset
+        policies[speed] = policy
+        optimizers[speed] = optimizer_class(policy.get_optim_params(), lr=policy.config.optimizer_lr)
+    torch.manual_seed(args.seed)
+    batch = bc_batch(batch_size, device) if bc else train_batch(policies["default"], batch_size, device)
+    for speed in SPEEDS:  # warm-up (untimed): memory, kernels, the optimizer's state
+        bar.set_postfix_str(f"{label} speed={speed}: warm-up")
+        time_training(policies[speed], optimizers[speed], batch, 1, clock, bar)
+    for r in range(args.rounds):
+        for speed in _bench.round_order(SPEEDS, r):
+            bar.set_postfix_str(f"{label} round {r + 1}/{args.rounds} speed={speed}")
+            seconds = time_training(policies[speed], optimizers[speed], batch, steps, clock, bar)
+            result.rates[speed].append(batch_size * steps / seconds)
+    del policies, optimizers, batch
+    _bench.release_device_memory(device)
+    return result
 
 
 def bench_preset(preset: str, args: argparse.Namespace, bar: tqdm) -> Result:
@@ -201,12 +306,19 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     )
     parser.add_argument("--warmup", type=int, default=8, help="untimed select_action calls after each reset (>= 6)")
     parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument(
+        "--speed-preset",
+        default="small",
+        choices=list(PRESETS),
+        help="rt1 preset of the speed=default / speed=fast comparison",
+    )
     parser.add_argument("--quick", action="store_true", help="smoke run: small preset, 1 round, few iterations")
     args = parser.parse_args(argv)
 
     presets = _bench.parse_names(parser, args.presets, list(PRESETS), "preset(s)")
     if args.quick:
         presets = ["small"]
+        args.speed_preset = "small"
         args.rounds, args.warmup = QUICK["rounds"], QUICK["warmup"]
     if args.skip_slow:
         presets = [p for p in presets if p not in SLOW_PRESETS]
@@ -234,11 +346,14 @@ def main(argv: list[str] | None = None) -> int:
     for preset in args.preset_list:
         _, train_steps, infer_steps = workload(preset, args, kind)
         total += 1 + args.rounds * (train_steps + 2 * (args.warmup + infer_steps))
+    for policy in SPEED_POLICIES:
+        total += len(SPEEDS) * (1 + args.rounds * speed_workload(policy, args, kind)[1])
     load_start = os.getloadavg()
     results: list[Result] = []
     with tqdm(total=total, desc="policy steps", unit="step", file=sys.stderr) as bar:
         for preset in args.preset_list:
             results.append(bench_preset(preset, args, bar))
+        speeds = [bench_speed(policy, args, bar) for policy in SPEED_POLICIES]
 
     print()
     header = (
@@ -263,6 +378,21 @@ def main(argv: list[str] | None = None) -> int:
             f"select_action {len(res.latency_ms[True])} timed calls per mode ({infer_steps} per round, "
             f"{args.warmup} warm-up after each reset)"
         )
+    print()
+    print("Training speed setting: updates at speed=default (float32) and speed=fast (channels-last, bf16 autocast)")
+    header = f"| {'policy':<9} | {'batch':>5} | {'unit':<9} | {'default':>9} | {'fast':>9} | {'fast / default':>14} |"
+    _bench.print_table(
+        header,
+        (
+            f"| {res.label:<9} | {res.batch:>5} | {res.unit:<9} | {res.rate('default'):>9.2f} "
+            f"| {res.rate('fast'):>9.2f} | {res.ratio:>13.2f}x |"
+            for res in speeds
+        ),
+    )
+    print()
+    for res in speeds:
+        rates = "; ".join(f"{speed} [{', '.join(f'{r:.2f}' for r in res.rates[speed])}]" for speed in SPEEDS)
+        print(f"{res.label}: {res.unit} per round, {rates} ({res.steps} steps each)")
     print(_bench.load_average_line(load_start, os.getloadavg()))
     headline = next((res for res in results if res.preset == "small"), results[0])
     print(f"token-reuse speedup of {headline.preset}: {headline.speedup:.2f}x (select_action latency OFF / ON)")

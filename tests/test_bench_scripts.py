@@ -100,6 +100,20 @@ def check_policy(lines: list[str], ratio: float) -> None:
     assert rounds.endswith(
         "(1 steps each); select_action 2 timed calls per mode (2 per round, 6 warm-up after each reset)"
     )
+    check_speed_rows(lines)
+
+
+def check_speed_rows(lines: list[str]) -> None:
+    """bc's and rt1's (small preset) updates per second at speed=default and speed=fast, and their ratio."""
+    rows = {row[0]: row for row in table_rows(lines, "") if row[0] in ("bc conv", "rt1 small")}
+    assert list(rows) == ["bc conv", "rt1 small"]
+    for label, unit in (("bc conv", "samples/s"), ("rt1 small", "windows/s")):
+        _, batch, printed_unit, default, fast, ratio = rows[label]
+        default, fast = float(default), float(fast)
+        assert int(batch) == 1 and printed_unit == unit and min(default, fast) > 0 and ratio.endswith("x")
+        assert close(float(ratio[:-1]), 2, fast / default, (default, 2), (fast, 2))  # fast / default
+        (rounds,) = [line for line in lines if line.startswith(f"{label}: {unit} per round, default [")]
+        assert rounds == f"{label}: {unit} per round, default [{default:.2f}]; fast [{fast:.2f}] (1 steps each)"
 
 
 def check_malloc(lines: list[str], ratio: float) -> None:

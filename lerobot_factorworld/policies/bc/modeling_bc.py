@@ -13,6 +13,7 @@ from lerobot.utils.constants import ACTION, OBS_STATE
 from torch import Tensor, nn
 
 from ..common.language import LANGUAGE_EMBEDDING_KEY, MINILM_DIM
+from ..common.speed import as_float32, compute_context, encoder_input
 from ..common.weights import RestoresBackboneFromCheckpoint
 from .augment import ImageAugmentation
 from .backbones import build_backbone
@@ -62,7 +63,7 @@ class BCNet(nn.Module):
         self.head = mlp(in_dim, config.hidden_dim, config.mlp_layers, action_dim)
 
     def encode(self, images: Tensor) -> Tensor:
-        images = self.augment(images)
+        images = encoder_input(self.augment(images), self.config.speed)  # speed=fast: channels-last
         if isinstance(self.encoder, PretrainedEncoder):
             # cached features are valid for un-augmented training frames only
             return self.encoder(images, use_cache=self.training and not self.augment.active)
@@ -121,7 +122,7 @@ class BCPolicy(RestoresBackboneFromCheckpoint, PreTrainedPolicy):
         """Nothing to forget: the policy sees one step at a time."""
 
     def forward(self, batch: dict[str, Tensor], reduction: str = "mean") -> tuple[Tensor, dict]:
-        predicted = self.model(batch)  # (B, A), normalised action space
+        predicted = self._predict(batch)  # (B, A), normalised action space
         per_sample = F.mse_loss(predicted, batch[ACTION], reduction="none").mean(dim=-1)  # (B,)
         loss = per_sample if reduction == "none" else per_sample.mean()
         with torch.no_grad():
@@ -136,4 +137,10 @@ class BCPolicy(RestoresBackboneFromCheckpoint, PreTrainedPolicy):
     def select_action(self, batch: dict[str, Tensor], **kwargs) -> Tensor:
         """(B, A) action, clamped to [-1, 1]: the range of the dataset's actions after min-max normalisation."""
         self.eval()
-        return self.model(batch).clamp(-1.0, 1.0)
+        return self._predict(batch).clamp(-1.0, 1.0)
+
+    def _predict(self, batch: dict[str, Tensor]) -> Tensor:
+        """``BCNet``'s float32 output (B, A), computed under ``config.speed`` (``policies/common/speed.py``)."""
+        speed = self.config.speed
+        with compute_context(speed, batch[self.camera_keys[0]].device):
+            return as_float32(self.model(batch), speed)

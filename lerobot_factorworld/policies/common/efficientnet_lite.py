@@ -14,6 +14,8 @@ import torch
 import torch.nn.functional as F  # noqa: N812
 from torch import Tensor, nn
 
+from .speed import float32_on_cpu
+
 
 @dataclass(frozen=True)
 class LiteStage:
@@ -50,12 +52,16 @@ class LiteBlock(nn.Module):
         self._project_conv = nn.Conv2d(mid, cout, 1, bias=False)
         self._bn2 = nn.BatchNorm2d(cout, **_BN)
         self.residual = stride == 1 and cin == cout
+        self.float32_depthwise = False  # see LiteNet.keep_depthwise_float32
+
+    def depthwise(self, x: Tensor) -> Tensor:
+        return self._bn1(self._depthwise_conv(x))
 
     def forward(self, x: Tensor) -> Tensor:
         out = x
         if hasattr(self, "_expand_conv"):
             out = F.relu6(self._bn0(self._expand_conv(out)))
-        out = F.relu6(self._bn1(self._depthwise_conv(out)))
+        out = F.relu6(float32_on_cpu(self.depthwise, out) if self.float32_depthwise else self.depthwise(out))
         out = self._bn2(self._project_conv(out))
         return out + x if self.residual else out
 
@@ -76,6 +82,13 @@ class LiteNet(nn.Module):
         self._conv_head = nn.Conv2d(cin, head, 1, bias=False)
         self._bn1 = nn.BatchNorm2d(head, **_BN)
         self.out_channels = head
+
+    def keep_depthwise_float32(self) -> None:
+        """Under bf16 autocast on CPU, run each block's depthwise convolution (and its BatchNorm) in float32:
+        PyTorch's CPU backward of a bf16 depthwise convolution is several times slower than float32's
+        (``policies/common/speed.py``). Without autocast, or on another device, nothing changes."""
+        for block in self._blocks:
+            block.float32_depthwise = True
 
     def block_channels(self) -> list[int]:
         return [block._bn2.num_features for block in self._blocks]

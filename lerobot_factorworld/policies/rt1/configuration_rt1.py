@@ -26,6 +26,7 @@ from lerobot.optim import AdamWConfig
 from ...scene.cameras import DEFAULT_IMAGE_SIZE
 from ..common.config import default_normalization_mapping, require_images_and_action
 from ..common.language import MINILM_DIM
+from ..common.speed import check_speed
 from .film_efficientnet import BACKBONES
 
 PRESETS: dict[str, dict] = {
@@ -103,6 +104,10 @@ class RT1Config(PreTrainedConfig):
         language_dim: Size of the instruction embedding the FiLM layers take; must be 384 (``MINILM_DIM``),
             what RT-1's language step (MiniLM-L6, the only encoder shipped offline) gives.
         normalization_mapping: ACTION must stay MIN_MAX (the bins span [-1, 1]); other modes are refused.
+        speed: ``default`` (float32: every existing result; the backbone's input is channels-last under either
+            value, as it always was) or ``fast`` (bfloat16 autocast over the forward, in training and in action
+            selection, tokens reused across steps included). One setting shared with bc, documented in
+            ``policies/common/speed.py``.
     """
 
     preset: str = "small"
@@ -127,12 +132,14 @@ class RT1Config(PreTrainedConfig):
     photometric: bool = True
     token_reuse: bool = True
     language_dim: int = MINILM_DIM
+    speed: str = "default"
     optimizer_lr: float | None = None
     optimizer_weight_decay: float = 0.0
     normalization_mapping: dict[str, NormalizationMode] = field(default_factory=default_normalization_mapping)
 
     def __post_init__(self) -> None:
         super().__post_init__()
+        check_speed(self.speed)
         if self.preset not in PRESETS:
             raise ValueError(f"unknown RT-1 preset {self.preset!r}; valid presets: {', '.join(PRESETS)}")
         self._resolve_backbone_start()

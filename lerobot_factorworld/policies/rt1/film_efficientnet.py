@@ -124,6 +124,13 @@ class FiLMEfficientNet(nn.Module):
         self.register_buffer("mean", torch.tensor(mean).view(1, 3, 1, 1), persistent=False)
         self.register_buffer("std", torch.tensor(std).view(1, 3, 1, 1), persistent=False)
 
+    def keep_depthwise_float32(self) -> None:
+        """For ``speed=fast`` (bf16 autocast): the Lite trunks' depthwise convolutions stay float32 on CPU, where
+        bf16's backward is slower (``LiteNet.keep_depthwise_float32``). The ``efficientnet_b3`` trunk (the GPU
+        preset ``rt1``) is left as it is."""
+        if self.backbone_name != "efficientnet_b3":
+            self.net.keep_depthwise_float32()
+
     def _build_b3(self, pretrained: bool, weights_path: str | None) -> None:
         model = efficientnet_b3(weights=None)
         if pretrained:

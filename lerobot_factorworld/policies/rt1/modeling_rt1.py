@@ -16,6 +16,7 @@ from torch import Tensor, nn
 
 from ..common.augment import random_shift
 from ..common.language import LANGUAGE_EMBEDDING_KEY
+from ..common.speed import as_float32, compute_context, is_fast
 from ..common.weights import RestoresBackboneFromCheckpoint
 from .configuration_rt1 import RT1Config
 from .film_efficientnet import FiLMEfficientNet
@@ -42,6 +43,8 @@ class RT1(nn.Module):
             pretrained=bool(config.pretrained_backbone) and load_backbone_weights,
             weights_path=config.backbone_weights_path,
         )
+        if is_fast(config.speed):
+            self.encoder.keep_depthwise_float32()
         self.token_learner = TokenLearner(config.token_dim, config.num_tokens)
         self.transformer = RT1Transformer(TransformerSpec.from_config(config, len(camera_keys), action_dim))
 
@@ -146,7 +149,8 @@ class RT1Policy(RestoresBackboneFromCheckpoint, PreTrainedPolicy):
 
     def forward(self, batch: dict[str, Tensor], reduction: str = "mean") -> tuple[Tensor, dict]:
         images = {key: batch[key] for key in self.camera_keys}  # (B, T, 3, H, W)
-        logits = self.model(images, batch[LANGUAGE_EMBEDDING_KEY])  # (B, T, A, V)
+        with self._compute(batch):
+            logits = as_float32(self.model(images, batch[LANGUAGE_EMBEDDING_KEY]), self.config.speed)  # (B, T, A, V)
         actions = batch[ACTION]  # (B, T, A), min-max normalised to [-1, 1]
         valid = ~batch["action_is_pad"] if "action_is_pad" in batch else None
         loss = self.action_tokenizer.loss(logits, actions, valid, per_sample=reduction == "none")
@@ -161,8 +165,9 @@ class RT1Policy(RestoresBackboneFromCheckpoint, PreTrainedPolicy):
         was_training = self.training
         self.eval()
         try:
-            window, _ = self._window(batch)
-            return self._act(window).unsqueeze(1)
+            with self._compute(batch):
+                window, _ = self._window(batch)
+                return self._act(window).unsqueeze(1)
         finally:
             self.train(was_training)
 
@@ -170,11 +175,17 @@ class RT1Policy(RestoresBackboneFromCheckpoint, PreTrainedPolicy):
     def select_action(self, batch: dict[str, Tensor], **kwargs) -> Tensor:
         """One new frame per call: (B, 3, H, W) per camera -> action (B, A); the frame joins the history."""
         self.eval()
-        window, history = self._window(batch)
-        queue = self._tokens if self.config.token_reuse else self._frames
-        queue.clear()
-        queue.extend(history)
-        return self._act(window)
+        with self._compute(batch):
+            window, history = self._window(batch)
+            queue = self._tokens if self.config.token_reuse else self._frames
+            queue.clear()
+            queue.extend(history)
+            return self._act(window)
+
+    def _compute(self, batch: dict[str, Tensor]):
+        """The forward's compute context under ``config.speed``: bf16 autocast for ``fast``, nothing for ``default``
+        (``policies/common/speed.py``; the backbone's input is channels-last under either)."""
+        return compute_context(self.config.speed, batch[self.camera_keys[0]].device)
 
     def _act(self, window: Tensor) -> Tensor:
         logits = self.model.transformer(window)[:, -1]  # (B, A, V)
