@@ -14,6 +14,7 @@ Commands:
     report          regenerate a study's report.md and plots from its results.csv alone (--results=CSV)
     compare-gaps    one factor's gap in two studies and their difference (--first=DIR --second=DIR --factor=F --task=T)
     compare-reruns  does a rerun land within the intervals of the results it repeats (--first=DIR --rerun=DIR)
+    merge-results   a study made in parts (other machines, sessions) as one results.csv (--into=DIR --add=[DIR])
     sync-docs       regenerate the committed reports under docs/results and the docs tables fenced from them (--check)
 
 Every command reads its settings with :func:`lerobot_factorworld.core.settings.parse_config` (draccus +
@@ -393,6 +394,48 @@ def cmd_compare_reruns(args: list[str]) -> None:
 
 
 @dataclass
+class MergeResultsConfig:
+    """``factorworld merge-results``: a study made in parts (other machines, sessions or commits) as one
+    ``results.csv`` and ``episodes.parquet`` in ``into``; every row keeps the commit that made it, a step in two
+    parts must hold the same numbers (``study/results/merge.py``). Then ``factorworld report`` renders the whole.
+
+    Attributes:
+        into: The study folder to merge into (holds ``results.csv`` and the study's config).
+        add: Folders of the other parts (each holds ``results.csv``).
+        config: The study's config (default: the one next to ``into``'s ``results.csv``).
+    """
+
+    into: str = ""
+    add: list[str] = field(default_factory=list)
+    config: str = ""
+
+    def __post_init__(self) -> None:
+        if not self.into or not self.add:
+            raise ValueError("merge-results needs --into=<study folder> and --add=[<folder>, ...]")
+        for name, folder in [("into", self.into), *(("add", f) for f in self.add)]:
+            if not Path(folder).is_dir():
+                raise FileNotFoundError(f"{name} {folder} is not a study folder")
+            check_input_file(_results_file(folder), name)
+        if self.config:
+            check_input_file(self.config, "config")
+
+
+def cmd_merge_results(args: list[str]) -> None:
+    # the study's config checks its policies with LeRobot (~4 s): only when this command runs
+    from .study.plan.grid import make_plan  # noqa: PLC0415
+    from .study.report.write import config_next_to, load_config  # noqa: PLC0415
+    from .study.results.merge import merge_results  # noqa: PLC0415
+
+    cfg = parse_config(MergeResultsConfig, args, "merge-results")
+    into = Path(cfg.into)
+    config = Path(cfg.config) if cfg.config else config_next_to(Path(_results_file(cfg.into)))
+    plan = make_plan(load_config(config))
+    results, episodes, added = merge_results(into, [Path(f) for f in cfg.add], plan)
+    print(f"wrote {results}" + (f" and {episodes}" if episodes else " (no episodes.parquet: not every part has one)"))
+    print(f"added {added} evaluation(s); render it with: factorworld report --results={results}")
+
+
+@dataclass
 class SyncDocsConfig:
     """``factorworld sync-docs``: regenerate every committed study report (``docs/results/<study>/``) and rewrite
     the tables of ``docs/*.md`` fenced from them (``study/report/published.py``).
@@ -443,6 +486,7 @@ COMMANDS: dict[str, Callable[[list[str]], None]] = {
     "report": cmd_report,
     "compare-gaps": cmd_compare_gaps,
     "compare-reruns": cmd_compare_reruns,
+    "merge-results": cmd_merge_results,
     "sync-docs": cmd_sync_docs,
 }
 

@@ -116,7 +116,7 @@ def regenerate_report(
     file" holds wherever it is written; in a study folder that still has its steps the report keeps "Where
     the time went". Returns the report's and the plots' paths; bad input raises one-line errors."""
     results = Path(results)
-    config = Path(config) if config else _config_next_to(results)
+    config = Path(config) if config else config_next_to(results)
     rows = read_results(results)
     cfg = load_config(config)
     check_study_name(rows, cfg.name, results)
@@ -146,7 +146,8 @@ def regenerate_report(
     return render_report(cfg, rows, out, command, len(plan.evaluations()), timing or [NO_TIMINGS, ""])
 
 
-def _config_next_to(results: Path) -> Path:
+def config_next_to(results: Path) -> Path:
+    """The study config beside a ``results.csv``: its study folder's ``config.json``, or a published ``config.yaml``."""
     for name in (RUN_CONFIG_FILE, PUBLISHED_CONFIG):
         if (results.parent / name).is_file():
             return results.parent / name

@@ -1,0 +1,97 @@
+"""One study's results made in parts (other machines, sessions or commits, each with its own step folders) as one
+``results.csv`` and ``episodes.parquet``: ``factorworld merge-results``. Every row keeps the commit and source
+hash that made it, so the merged file says which part each number came from; ``factorworld report`` then
+renders the whole.
+
+Only rows of one study merge: the same study name, each evaluation (its step key) once. A key found in both parts
+must hold the same numbers (the same inputs give the same result: a rerun that differs is what
+``factorworld compare-reruns`` reads, not something to average), and a cell (method, task, N, seed, widths,
+condition) must not come from two different steps (two grids under one name). Rows come out in the order of the
+study's plan, so merging in either order writes the same bytes.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+from ..plan.grid import Plan
+from .episodes import EPISODES_FILE, read_episodes, write_episodes
+from .rows import RESULT_COLUMNS, RESULTS_FILE, read_results, write_results
+
+CELL = ("method", "task", "n_train_envs", "seed", "widths", "condition")
+PROVENANCE_COLUMNS = ("commit", "source_hash")  # where a row was made, not what it measured
+
+
+def merge_rows(parts: Sequence[Sequence[dict[str, Any]]], plan: Plan, names: Sequence[str]) -> list[dict[str, Any]]:
+    """The rows of every part, each evaluation once, in ``plan``'s order; conflicts refused in one line naming
+    the parts (``names``) and the step."""
+    studies = {row["study"] for part in parts for row in part}
+    if len(studies) > 1:
+        raise ValueError(
+            f"the parts hold different studies ({', '.join(sorted(studies))}): only one study's parts merge"
+        )
+    by_step: dict[str, tuple[dict[str, Any], str]] = {}
+    by_cell: dict[tuple, str] = {}
+    for part, name in zip(parts, names):
+        for row in part:
+            measured = {c: row[c] for c in RESULT_COLUMNS if c not in PROVENANCE_COLUMNS}
+            seen = by_step.get(row["step"])
+            if seen is not None:
+                other = {c: seen[0][c] for c in measured}
+                if not _same(other, measured):
+                    differ = [c for c in measured if not _same({c: other[c]}, {c: measured[c]})]
+                    raise ValueError(
+                        f"step {row['step']} ({_label(row)}) differs between {seen[1]} and {name} in "
+                        f"{', '.join(differ)}: compare them with factorworld compare-reruns, merge one"
+                    )
+                continue
+            cell = tuple(str(row[c]) for c in CELL)
+            if cell in by_cell and by_cell[cell] != row["step"]:
+                raise ValueError(
+                    f"{_label(row)} comes from two evaluation steps ({by_cell[cell]} and {row['step']}): the parts "
+                    "are of different grids under one study name"
+                )
+            by_step[row["step"]] = (row, name)
+            by_cell[cell] = row["step"]
+    order = {step.key: i for i, step in enumerate(plan.evaluations())}
+    unplanned = [row for row, _ in by_step.values() if row["step"] not in order]
+    if unplanned:
+        raise ValueError(f"{_label(unplanned[0])} ({unplanned[0]['step']}) is not in the study's plan: pass its config")
+    return [row for row, _ in sorted(by_step.values(), key=lambda item: order[item[0]["step"]])]
+
+
+def merge_results(into: Path, others: Sequence[Path], plan: Plan) -> tuple[Path, Path | None, int]:
+    """Merge the ``results.csv`` (and ``episodes.parquet``, where every part has one) of the folders ``others``
+    into folder ``into``, checked in full before anything is written; returns the written paths and the rows
+    added."""
+    folders = [into, *others]
+    parts = [read_results(folder / RESULTS_FILE) for folder in folders]
+    names = [str(folder) for folder in folders]
+    rows = merge_rows(parts, plan, names)
+    episodes = None
+    if all((folder / EPISODES_FILE).is_file() for folder in folders):
+        kept = {row["step"] for row in rows}
+        seen: set[tuple[str, int]] = set()
+        merged = []
+        for folder in folders:
+            for episode in read_episodes(folder / EPISODES_FILE):
+                key = (episode["step"], episode["episode_ix"])
+                if episode["step"] in kept and key not in seen:
+                    seen.add(key)
+                    merged.append(episode)
+        order = {row["step"]: i for i, row in enumerate(rows)}
+        merged.sort(key=lambda e: (order[e["step"]], e["episode_ix"]))
+        episodes = write_episodes(merged, into / EPISODES_FILE)
+    written = write_results(rows, into / RESULTS_FILE)
+    return written, episodes, len(rows) - len(parts[0])
+
+
+def _same(a: dict[str, Any], b: dict[str, Any]) -> bool:
+    """Equal, NaN equal to NaN (an undefined gap in both)."""
+    return all(x == y or (x != x and y != y) for x, y in ((a[k], b[k]) for k in a))
+
+
+def _label(row: dict[str, Any]) -> str:
+    return " ".join(f"{c}={row[c]}" for c in CELL)

@@ -1,0 +1,96 @@
+"""``factorworld merge-results``: a study made in parts as one results.csv and episodes.parquet, on F1's committed
+results split by seed into two parts (what a study run over two sessions looks like)."""
+
+from __future__ import annotations
+
+import csv
+import shutil
+from pathlib import Path
+
+import pyarrow as pa
+import pyarrow.compute as pc
+import pyarrow.parquet as pq
+import pytest
+
+from lerobot_factorworld.cli import main
+from lerobot_factorworld.study.plan.grid import make_plan
+from lerobot_factorworld.study.report.write import load_config
+from lerobot_factorworld.study.results.merge import merge_results, merge_rows
+from lerobot_factorworld.study.results.rows import read_results
+
+F1 = Path(__file__).resolve().parents[1] / "docs" / "results" / "f1_ordering"
+
+
+def _part(tmp_path: Path, name: str, seeds: set[int]) -> Path:
+    """F1's committed rows and episodes of ``seeds`` in a folder of their own, with its config."""
+    folder = tmp_path / name
+    folder.mkdir()
+    shutil.copy(F1 / "config.yaml", folder / "config.yaml")
+    with open(F1 / "results.csv", newline="") as f:
+        lines = f.read().splitlines(keepends=True)
+    rows = [line for line in lines[1:] if int(next(csv.reader([line]))[5]) in seeds]
+    (folder / "results.csv").write_text(lines[0] + "".join(rows))
+    table = pq.read_table(F1 / "episodes.parquet")
+    pq.write_table(
+        table.filter(pc.is_in(table["seed"], value_set=pa.array(sorted(seeds)))),
+        folder / "episodes.parquet",
+    )
+    return folder
+
+
+@pytest.fixture(scope="module")
+def plan():
+    return make_plan(load_config(F1 / "config.yaml"))
+
+
+def test_two_parts_merge_back_into_the_committed_bytes_in_either_order(tmp_path, plan):
+    seeds = {int(r["seed"]) for r in read_results(F1 / "results.csv")}
+    assert len(seeds) >= 2
+    first, second = _part(tmp_path, "first", {min(seeds)}), _part(tmp_path, "second", seeds - {min(seeds)})
+    results, episodes, added = merge_results(first, [second], plan)
+    assert results.read_bytes() == (F1 / "results.csv").read_bytes()
+    assert added == len(read_results(second / "results.csv"))
+    merged, committed = pq.read_table(episodes), pq.read_table(F1 / "episodes.parquet")
+    assert merged.select(committed.column_names).equals(committed)
+    again = _part(tmp_path, "again", seeds - {min(seeds)})
+    merge_results(again, [_part(tmp_path, "other", {min(seeds)})], plan)
+    assert (again / "results.csv").read_bytes() == (F1 / "results.csv").read_bytes()
+
+
+def test_a_step_in_both_parts_merges_once_and_must_hold_the_same_numbers(plan):
+    rows = read_results(F1 / "results.csv")
+    assert merge_rows([rows, rows[:3]], plan, ["a", "b"]) == rows  # the same evaluation twice: once
+    changed = [dict(r) for r in rows[:1]]
+    changed[0]["successes"] += 1
+    with pytest.raises(ValueError, match=rf"step {rows[0]['step']} .* differs between a and b in successes: compare"):
+        merge_rows([rows, changed], plan, ["a", "b"])
+    provenance = [{**rows[0], "commit": "0" * 40, "source_hash": "1" * 12}]  # made elsewhere: still the same result
+    assert merge_rows([rows, provenance], plan, ["a", "b"]) == rows
+
+
+def test_two_grids_or_two_studies_under_one_name_are_refused(plan):
+    rows = read_results(F1 / "results.csv")
+    other_step = [{**rows[0], "step": "f" * 16}]
+    with pytest.raises(ValueError, match="comes from two evaluation steps"):
+        merge_rows([rows, other_step], plan, ["a", "b"])
+    with pytest.raises(ValueError, match="the parts hold different studies"):
+        merge_rows([rows, [{**rows[0], "study": "other"}]], plan, ["a", "b"])
+    unplanned = [{**r, "step": "e" * 16} for r in rows[:1]]
+    with pytest.raises(ValueError, match="is not in the study's plan"):
+        merge_rows([unplanned], plan, ["a"])
+
+
+def test_the_command_merges_and_refuses_in_one_line_writing_nothing(tmp_path, capsys):
+    seeds = {int(r["seed"]) for r in read_results(F1 / "results.csv")}
+    first, second = _part(tmp_path, "first", {min(seeds)}), _part(tmp_path, "second", seeds - {min(seeds)})
+    before = (first / "results.csv").read_bytes()
+    with pytest.raises(SystemExit) as exit_info:
+        main(["merge-results", f"--into={first}", f"--add=[{tmp_path / 'missing'}]"])
+    assert exit_info.value.code == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("error: add ") and "is not a study folder" in err[0]
+    assert (first / "results.csv").read_bytes() == before
+    main(["merge-results", f"--into={first}", f"--add=[{second}]"])
+    out = capsys.readouterr().out
+    assert f"wrote {first / 'results.csv'} and {first / 'episodes.parquet'}" in out and "factorworld report" in out
+    assert (first / "results.csv").read_bytes() == (F1 / "results.csv").read_bytes()
