@@ -6,6 +6,7 @@ import os
 import shutil
 import subprocess
 import sys
+import zipfile
 from pathlib import Path
 
 import pytest
@@ -73,6 +74,10 @@ def test_a_wheel_in_a_fresh_environment_runs_a_study_by_name_and_lerobot_finds_t
     venv = tmp_path / "venv"
     subprocess.run([*uv, "venv", "--quiet", str(venv), "-p", sys.executable], check=True, env=env)
     (wheel,) = wheels.glob("*.whl")
+    with zipfile.ZipFile(wheel) as archive:  # every packaged config, subfolders too
+        packaged = {Path(n).relative_to("lerobot_factorworld/studies") for n in archive.namelist()
+                    if n.startswith("lerobot_factorworld/studies/") and n.endswith(".yaml")}  # fmt: skip
+    assert packaged == {p.relative_to(STUDIES_DIR) for p in STUDIES_DIR.rglob("*.yaml")}
     subprocess.run(
         [*uv, "pip", "install", "--quiet", "--offline", "-p", str(venv / "bin" / "python"), str(wheel)],
         check=True,
