@@ -33,7 +33,7 @@ from ...scene.build import DEFAULT_QUALITY, QUALITIES
 from ...scene.cameras import DEFAULT_CAMERAS_SETTING, DEFAULT_IMAGE_SIZE
 from ...tasks import get_task
 from ..run.checkpoint import checkpoint_setting
-from ..run.inputs import EPOCHS_OVER, OWN_FRAMES
+from ..run.inputs import EPOCHS_OVER, OWN_FRAMES, whole_epochs
 from .claim_config import ClaimConfig
 
 ALL_PAIRS = "all"
@@ -47,11 +47,6 @@ DEVICE_PATTERN = re.compile(r"cpu|mps|cuda(:\d+)?")
 def is_path_setting(name: str) -> bool:
     """A policy setting or ``lerobot-train`` flag that names a local file or folder."""
     return name.endswith(PATH_SUFFIXES)
-
-
-def _whole(value: float) -> float | int:
-    """``20.0`` -> ``20``: epochs as the config and the keys write them."""
-    return int(value) if float(value).is_integer() else value
 
 
 def absolute_path(value: str) -> str:
@@ -363,7 +358,7 @@ class TrainSettings:
         if not self.curve_every or self.epochs is None:
             return []
         count = math.ceil(self.epochs / self.curve_every) - 1
-        return [_whole(self.curve_every * j) for j in range(1, count + 1)]
+        return [whole_epochs(self.curve_every * j) for j in range(1, count + 1)]
 
     def __post_init__(self) -> None:
         self.extra_args = resolve_arg_paths(list(self.extra_args))

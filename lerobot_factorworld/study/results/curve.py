@@ -16,9 +16,9 @@ from ...protocol.conditions import TRAIN_SUITE
 from ..metrics import wilson_interval
 from ..plan.config import StudyConfig
 from ..plan.grid import CURVE_EPOCHS, Plan
+from ..run.inputs import whole_epochs
 from ..run.steps import is_done, read_result, step_folder
-from .rows import Evaluation as _Evaluation
-from .rows import csv_text, policy_of
+from .rows import Evaluation, csv_text, policy_of
 
 CURVE_FILE = "curve.csv"
 CURVE_COLUMNS = (
@@ -47,19 +47,22 @@ def curve_rows(cfg: StudyConfig, plan: Plan, study_dir: str | Path) -> list[dict
     if not plan.curve_points():
         return []
     points = [(s, s.meta[CURVE_EPOCHS]) for s in plan.curve_points()]
-    last = int(cfg.train.epochs) if float(cfg.train.epochs or 0).is_integer() else cfg.train.epochs
+    last = whole_epochs(cfg.train.epochs)
     points += [(s, last) for s in plan.evaluations() if s.meta["condition"] == TRAIN_SUITE and s.deps]
-    rows = []
+    rows, trainings = [], {}  # each training's result read once for all its checkpoints
     for step, epochs in points:
         if not is_done(step, study_dir):
             continue
-        trained = read_result(step_folder(study_dir, "train", step.deps[0]))
+        key = step.deps[0]
+        if key not in trainings:
+            trainings[key] = read_result(step_folder(study_dir, "train", key))
+        trained = trainings[key]
         saved_at = trained.get("curve", {}).get(str(epochs), trained["steps"])
-        rows.append(_row(cfg, _Evaluation(step, read_result(step, study_dir)), epochs, saved_at))
+        rows.append(_row(cfg, Evaluation(step, read_result(step, study_dir)), epochs, saved_at))
     return sorted(rows, key=lambda r: ([str(r[c]) for c in CELL], r["epochs"]))
 
 
-def _row(cfg: StudyConfig, evaluation: _Evaluation, epochs: float, saved_at: int) -> dict[str, Any]:
+def _row(cfg: StudyConfig, evaluation: Evaluation, epochs: float, saved_at: int) -> dict[str, Any]:
     meta, successes = evaluation.labels, evaluation.result["successes"]
     k, n = sum(successes), len(successes)
     low, high = wilson_interval(k, n)

@@ -22,6 +22,11 @@ from ...protocol.sampling import SamplingOptions
 from ...scene.build import DEFAULT_QUALITY
 
 
+def whole_epochs(value: float) -> float | int:
+    """``20.0`` -> ``20``: epochs as configs, keys and a learning curve's labels write them."""
+    return int(value) if float(value).is_integer() else value
+
+
 def _without_unset(out: dict[str, Any], optional: frozenset[str]) -> dict[str, Any]:
     """``out`` without the optional entries left unset (None), so that adding one keeps every earlier key."""
     return {k: v for k, v in out.items() if k not in optional or v is not None}

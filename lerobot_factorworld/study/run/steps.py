@@ -46,7 +46,7 @@ from ...protocol.conditions import fingerprint
 from ...protocol.coverage import coverage
 from .checkpoint import GIVEN_CHECKPOINT, checkpoint_folder
 from .eval_env import eval_env_config
-from .inputs import MERGED_FRAMES, CollectInputs, EvalInputs, TrainInputs
+from .inputs import MERGED_FRAMES, CollectInputs, EvalInputs, TrainInputs, whole_epochs
 from .recording import RECORD_SETTING, RECORDED_KEY, EpisodeRecorder, write_recorded
 
 KINDS = ("collect", "train", "eval")
@@ -403,7 +403,7 @@ def curve_saves(inputs: TrainInputs, frames: int, steps: int) -> dict[str, int]:
         if j * every >= steps or j * inputs.curve_every >= inputs.epochs:
             return saves
         epochs = j * inputs.curve_every
-        saves[str(int(epochs) if float(epochs).is_integer() else epochs)] = j * every
+        saves[str(whole_epochs(epochs))] = j * every
 
 
 def curve_checkpoint(train_folder: Path, saved_at: int) -> Path:
