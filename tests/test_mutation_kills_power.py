@@ -1,6 +1,7 @@
 """The power of a plan (study/plan/power.py) where mutation testing found the suite silent (docs/testing.md): a cell's
 resolvable gap against an oracle on explicit paired episodes (other sizes, other z, the edges of both searches),
-the z of the pair metric, a sweep of one radius, and ``--dry-run``'s power lines word for word."""
+the z of the pair metric, a sweep of one radius, ``--dry-run``'s power lines word for word, and both searches'
+boundaries: a lower bound of exactly 0 (z = 0) does not resolve, a half-width equal to the gap does."""
 
 from __future__ import annotations
 
@@ -115,3 +116,27 @@ def test_dry_run_power_lines_word_for_word():
         "    radius slope, gap per 0.025 m over 2 radii                   0.122   0.141   0.085",
     ]
     assert power.cell_resolvable_gap(4, 0.9) == _by_episodes(4, 0.9) == 0.75
+
+
+def test_a_zero_width_interval_resolves_the_first_gap_above_0_and_not_a_gap_of_0():
+    # z = 0: Wilson's interval is the point P itself, so Newcombe's lower bound is the gap itself: a gap of exactly
+    # 0 (P_F = P_T) has the lower bound 0, which does not exclude 0 ("> 0", not ">= 0")
+    assert metrics.newcombe_paired(16, 0, 0, 4, 0.0) == (0.0, 0.0, 0.0)  # no reversals, 16 of 20 train successes
+    assert metrics.newcombe_paired(5, 5, 5, 5, 0.0) == (0.0, 0.0, 0.0)  # independent at P_T = P_F = 0.5, 20 pairs
+    # so the first gap above 0 resolves: 1 train-only success of 20 (0.05); the grid's first step 0.5 / 2000
+    assert power.cell_resolvable_gap(20, 0.8, z=0.0) == 0.05
+    assert power.cell_resolvable_gap(20, 0.5, paired=False, z=0.0) == 0.5 / power.GRID == 0.00025
+
+
+def test_a_mean_gap_whose_half_width_equals_it_resolves():
+    # the rule is z sqrt(Var / pairs) <= d (module docstring): 4 pairs at P_T = 0.5 and z = 2; any P_F > 0 adds
+    # P_F (1 - P_F) to Var = 0.25 while d < 0.5, so only P_F = 0 can resolve, where the half-width
+    # 2 x sqrt((0.25 + 0) / 4) = 0.5 is the gap 0.5 exactly (every number here is exact in binary)
+    assert power.mean_resolvable_gap(4, 0.5, z=2.0) == 0.5
+
+
+def test_no_mean_gap_resolves_at_a_training_success_of_0():
+    """At P_T = 0 every candidate gap is 0 and its interval [0, 0] does not exclude 0: NaN, as for one cell
+    (a 0.0 here made the claims table report one episode per cell as enough to resolve any effect)."""
+    assert math.isnan(power.mean_resolvable_gap(100, 0.0))
+    assert math.isnan(power.cell_resolvable_gap(100, 0.0))

@@ -1,10 +1,13 @@
 """Stale-step detection (study/plan/stale.py) where mutation testing found the suite silent (docs/testing.md): the
 stale line's label count at exactly STALE_LABELS, the strict refusal's text, when the dirty-tree part joins the
-warning, the order and names of the folders set aside. Fast: result files written by hand, no step runs."""
+warning, the warning flushed at once, the order and names of the folders set aside (a stale step's commit from the
+list, its result not read again). Fast: result files written by hand, no step runs."""
 
 from __future__ import annotations
 
+import io
 import json
+import sys
 from dataclasses import replace
 from pathlib import Path
 
@@ -115,3 +118,39 @@ def test_rerun_stale_sets_dependents_aside_first_under_the_commit_that_made_each
         f"{collect.key}.stale-826fe54",
     ]
     assert all(p.is_dir() and not steps.is_done(s, study_dir) for p, s in zip(moved, plan.steps[::-1]))
+
+
+def test_the_warning_reaches_a_block_buffered_stderr_at_once(study, monkeypatch):
+    _, plan, study_dir = study
+    _made_by(plan.of_kind("collect")[0], study_dir, OLD)
+    found = stale.stale_steps(plan, study_dir)
+    raw = io.BytesIO()
+    # no line buffering: what is printed stays in the wrapper until a flush (stderr piped through such a stream)
+    monkeypatch.setattr(sys, "stderr", io.TextIOWrapper(raw, encoding="utf-8"))
+    stale.warn_stale(RunOptions(), plan, study_dir, [])  # nothing stale, clean tree, nothing to run: no line
+    assert raw.getvalue() == b""
+    stale.warn_stale(RunOptions(), plan, study_dir, found)  # before hours of steps: flushed, not held
+    summary = stale.stale_summary(found, NOW)
+    assert raw.getvalue().decode() == f"warning: {summary}; --rerun_stale=true redoes them, --strict=true refuses\n"
+
+
+def test_rerun_stale_takes_a_stale_steps_commit_from_the_list_without_reading_its_result_again(study, monkeypatch):
+    _, plan, study_dir = study
+    collect, (train,), evals = plan.of_kind("collect")[0], plan.of_kind("train"), plan.of_kind("eval")
+    _made_by(collect, study_dir, OLD)
+    found = stale.stale_steps(plan, study_dir)
+    assert found == [stale.Stale(collect, OLD)]
+    read = []
+
+    def spy(step: steps.Step, folder: Path) -> dict:
+        read.append(step.key)
+        return steps.read_result(step, folder)
+
+    monkeypatch.setattr(stale, "read_result", spy)
+    moved = stale.rerun_stale(plan, study_dir, found)
+    # only the 4 dependents' results are read (reverse plan order); the collection's commit is the list's
+    assert read == [evals[2].key, evals[1].key, evals[0].key, train.key]
+    assert [p.name for p in moved] == [
+        *(f"{s.key}.stale-aaaaaaa" for s in (evals[2], evals[1], evals[0], train)),
+        f"{collect.key}.stale-826fe54",
+    ]

@@ -62,7 +62,10 @@ def cell_resolvable_gap(episodes: int, p_train: float, paired: bool = True, z: f
 def mean_resolvable_gap(pairs: int, p_train: float, z: float = Z95) -> float:
     """Smallest mean gap over ``pairs`` episode pairs (all cells together) whose normal-approximation 95%
     interval excludes 0, outcomes independent given the rates (at P_T = 0.5 the closed form is
-    sqrt(z^2 / 2 / (pairs + z^2)), up to the search's resolution)."""
+    sqrt(z^2 / 2 / (pairs + z^2)), up to the search's resolution). NaN at P_T = 0, where no gap can open, as
+    ``cell_resolvable_gap`` gives."""
+    if p_train <= 0:
+        return math.nan
     for i in range(1, GRID + 1):
         d = p_train * i / GRID
         p_f = p_train - d
