@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import itertools
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -111,3 +112,104 @@ def test_a_table_with_no_room_and_a_pool_with_no_shape_are_refused_naming_what_r
 def _every_family() -> list[str]:
     pool = sampling._Pools("train", SamplingOptions()).shape
     return sorted({pool.family_of(name) for name in pool.names})
+
+
+def test_aside_reads_the_whole_state_of_any_bit_generator_a_caller_passes():
+    # sample_factor takes any np.random.Generator; only PCG64 (default_rng's) has an all-integer state. MT19937's
+    # key, Philox's counter/key/buffer and SFC64's state are uint32/uint64 arrays, which the JSON encoder can only
+    # write through ``default`` (as lists): without it _aside raises, and with a ``default`` that drops them the
+    # arrays become ``null``, so every state at the same position would seed the same aside generator
+    for make in (np.random.MT19937, np.random.Philox, np.random.SFC64):
+        rng_a, rng_b = np.random.Generator(make(1)), np.random.Generator(make(2))
+        assert type(rng_a.bit_generator.state["state"]) is dict  # the arrays sit in this nested dict
+        before = rng_a.bit_generator.state["state"]
+        draw_a = int(sampling._aside(rng_a).integers(2**62))
+        assert all(np.array_equal(v, rng_a.bit_generator.state["state"][k]) for k, v in before.items())  # unmoved
+        assert int(sampling._aside(rng_a).integers(2**62)) == draw_a  # the same state, the same generator
+        # seeds 1 and 2 give the same position and other arrays: the arrays alone tell the two states apart
+        assert int(sampling._aside(rng_b).integers(2**62)) != draw_a, make.__name__
+    # through the public draw: a table texture forced to break its rule (the object wears the very texture the
+    # unconstrained draw picks) is replaced through _aside, with an MT19937 generator as with PCG64
+    images = SamplingOptions(rgb_fraction=0.0)
+    for seed in range(3):
+        free = sample_factor("table_texture", TASK, np.random.Generator(np.random.MT19937(seed)), options=images)
+        rng = np.random.Generator(np.random.MT19937(seed))
+        table = sample_factor("table_texture", TASK, rng, options=images, scene={"object_texture": free})
+        assert table != free and table in sampling._Pools("train", images).texture.names
+
+
+def test_a_shape_folder_family_is_its_top_level_subfolder_for_the_look_alike_rule(tmp_path):
+    # two families of six meshes each; sampling only lists the files, so a one-vertex .obj is enough
+    for family in ("crab", "moth"):
+        (tmp_path / family).mkdir()
+        for i in range(1, 7):
+            (tmp_path / family / f"{family}_{i}.obj").write_text("v 0 0 0\n")
+    # the variant split puts files of both families on the training side
+    options = SamplingOptions(shape_folder=str(tmp_path), asset_split="variant", n_distractors=2)
+    pool = sampling._Pools("train", options).shape
+    moths = [n for n in pool.names if "/moth/" in n]
+    assert len(moths) >= 2 and len(moths) < len(pool.names)
+    assert pool.family_of(moths[0]) == "moth"  # the subfolder, not the file (asset_family without the folder)
+
+    def families(scene):
+        return [
+            Path(d.shape.removeprefix("file:")).parent.name
+            for s in range(20)
+            for d in sample_factor("distractors", "pick-place", np.random.default_rng(s), options=options, scene=scene)
+        ]
+
+    # no folder family is shown by pick-place's own scene: both are drawn (40 draws, about 4 in 7 of them moths)
+    assert set(families({})) == {"crab", "moth"}
+    # beside a moth object every other moth file is a look-alike: all 40 distractors are crabs
+    assert families({"object_shape": moths[0]}) == ["crab"] * 40
+
+
+# (x0, y0, x1, y1) boxes: open rectangles overlap iff both their x and their y intervals overlap
+UNIT = (0.0, 0.0, 1.0, 1.0)
+OVERLAP_CASES = [
+    (UNIT, (0.5, 0.5, 2.0, 2.0), True),  # corner over corner
+    (UNIT, UNIT, True),  # the same box
+    (UNIT, (1.0, 0.0, 2.0, 1.0), False),  # touching at x = 1 from the right: no area in common
+    ((1.0, 0.0, 2.0, 1.0), UNIT, False),  # the same, the other way round
+    (UNIT, (0.0, 1.0, 1.0, 2.0), False),  # touching at y = 1 from above
+    ((0.0, 1.0, 1.0, 2.0), UNIT, False),  # the same, the other way round
+    ((5.0, 0.0, 6.0, 1.0), UNIT, False),  # far right, low y: only a's x0 (5) > b's x1 (1) separates them
+    ((5.0, 0.0, 6.0, 1.0), (0.0, 0.0, 1.0, 10.0), False),  # far right of a tall box (b's y1 = 10 > a's x0)
+    (UNIT, (5.0, 0.0, 6.0, 1.0), False),  # far left: only b's x0 (5) > a's x1 (1) separates them
+    ((0.0, 0.0, 1.0, 10.0), (5.0, 0.0, 6.0, 1.0), False),  # a tall box far left of b (a's y1 = 10 > b's x0)
+    ((0.0, 5.0, 1.0, 6.0), (0.0, 0.0, 1.0, 2.0), False),  # high above: only a's y0 (5) > b's y1 (2) separates
+]
+
+
+@pytest.mark.parametrize(("a", "b", "expected"), OVERLAP_CASES)
+def test_boxes_overlap_only_where_they_share_area(a, b, expected):
+    assert sampling._overlap(a, b) is expected
+
+
+def test_boxes_overlap_exactly_when_both_intervals_overlap_on_a_grid():
+    # every pair of boxes with corners on a 4 x 4 grid (touching edges included) against the interval rule
+    corners = [(x0, y0, x1, y1) for x0, x1 in itertools.combinations(range(4), 2) for y0, y1 in itertools.combinations(range(4), 2)]  # fmt: skip
+    for a, b in itertools.product(corners, repeat=2):
+        expected = max(a[0], b[0]) < min(a[2], b[2]) and max(a[1], b[1]) < min(a[3], b[3])
+        assert sampling._overlap(a, b) == expected, (a, b)
+
+
+def test_a_distractor_shifted_to_held_out_files_avoids_the_family_of_an_object_inherited_from_training(tmp_path):
+    # the look-alike rule across splits: an object shape drawn from the training side of a shape folder keeps
+    # its family (its top-level subfolder) when a shift draws distractors from the held-out side. Before the
+    # pool knew its folder, the inherited object's family was its own file name and 17 of 30 shifted
+    # environments held a distractor of the object's family
+    for family in ("crab", "moth"):
+        (tmp_path / family).mkdir()
+        for i in range(1, 7):
+            (tmp_path / family / f"{family}_{i}.obj").write_text("v 0 0 0\n")
+    options = SamplingOptions(shape_folder=str(tmp_path), asset_split="variant", n_distractors=2)
+    base = sampling.sample_configs("pick-place", 5, seed=0, factors=["object_shape"], options=options)
+    objects = {Path(c.factors.object_shape.removeprefix("file:")).parent.name for c in base}
+    assert objects <= {"crab", "moth"} and objects  # the objects come from the folder
+    for split in ("train", "eval"):
+        shifted = sampling.shift_configs(base, "distractors", 30, split=split, options=options)
+        for config in shifted:
+            object_family = Path(config.factors.object_shape.removeprefix("file:")).parent.name
+            shown = {Path(d.shape.removeprefix("file:")).parent.name for d in config.factors.distractors}
+            assert object_family not in shown, (split, config.factors.object_shape, shown)

@@ -239,16 +239,18 @@ class _Pool:
     kind: str
     names: tuple[str, ...]
     families: Mapping[str, str]
+    folder: str | None = None  # the asset folder the names come from: an inherited file's family is its subfolder
 
     @classmethod
     def of(cls, kind: str, split: str, options: SamplingOptions) -> _Pool:
         folder = options.texture_folder if kind == "texture" else options.shape_folder
         names = asset_split_names(kind, split, folder, mode=options.asset_split)  # type: ignore[arg-type]
-        return cls(kind, names, {name: asset_family(name, folder) for name in names})
+        return cls(kind, names, {name: asset_family(name, folder) for name in names}, folder)
 
     def family_of(self, name: str) -> str:
-        """Family of a pool name, or of any other asset (e.g. one inherited from a hand-made config)."""
-        return self.families.get(name) or asset_family(name)
+        """Family of a pool name, or of any other asset: one inherited from another split's pool of the same
+        folder (its top-level subfolder) or from a hand-made config."""
+        return self.families.get(name) or asset_family(name, self.folder)
 
 
 class _Pools:
