@@ -284,3 +284,265 @@ def test_the_papers_ordering_claims_name_their_source():
     )
     assert claims.ordering_claims(["light", "distractors"]) == []  # one tier: nothing to order
     assert CAPPED in claims.VERDICTS
+
+
+# --- the rows each comparison leaves out, the cells it counts, and the level its smallest effect is taken at -------
+
+
+def test_a_trend_over_n_compares_the_factors_smallest_and_largest_n_of_its_task(cfg):
+    """Two factors at N = 5, 10 and 20 of the claim's task: their mean gap at N = 20 minus that at N = 5. Left out
+    (and placed first): another task's rows, and an N (50) where only the train suite and another factor ran."""
+    light = {5: [0.6, 0.55, 0.7, 0.6, 0.6], 10: [0.7, 0.7, 0.75, 0.7, 0.65], 20: [0.85, 0.8, 0.9, 0.85, 0.8]}
+    table_pos = {5: [0.5, 0.4, 0.55, 0.45, 0.5], 10: [0.6, 0.6, 0.7, 0.65, 0.6], 20: [0.8, 0.75, 0.9, 0.8, 0.85]}
+    rows = [
+        r
+        for n in (5, 20)
+        for r in rows_of({"train": TRAIN, "table_pos": CAMERA, "light": CAMERA}, task="pick-place", n=n)
+    ]
+    rows += rows_of({"train": TRAIN, "camera_pos": CAMERA}, n=50)
+    rows += [
+        r for n in (5, 10, 20) for r in rows_of({"train": TRAIN, "table_pos": table_pos[n], "light": light[n]}, n=n)
+    ]
+    c = claim("trend", factors=["table_pos", "light"], over="n", direction="shrinks", task="door-open")
+    found, (comparison,) = decide_one(c, cfg, rows)
+    gap = {n: (np.subtract(TRAIN, table_pos[n]) + np.subtract(TRAIN, light[n])) / 2 for n in (5, 20)}  # per seed
+    change = gap[20] - gap[5]  # = (table_pos + light at 5 - the same at 20) / 2: -0.275, -0.3, -0.275, -0.3, -0.275
+    p = np.mean(table_pos[5] + light[5] + table_pos[20] + light[20])  # the four cells, pooled over equal episodes
+    check(found.comparisons[0], comparison, label="table_pos + light over N", threshold=0.0, sign=-1,
+          point=change.mean(), per_seed=change, headroom=gap[5].mean(),  # the gap at N = 5: the most it can shrink
+          resolvable=lambda e, z: power.difference_resolvable(max(1, round(10 * e)), p, z),  # 2 factors x 5 seeds
+          verdict=AGREES, level=0.95)  # fmt: skip
+
+
+PICK_TRAIN = [0.8, 0.85, 0.9, 0.8, 0.85]
+
+
+@pytest.mark.parametrize("wider", [20, 5])
+def test_a_trend_over_n_counts_the_cells_of_its_thinner_end(cfg, wider):
+    """table_pos at N = 5 and 20 on door-open, and on pick-place at N = ``wider`` only: that end has 10 cells, the
+    other 5, and the smallest effect resolved is that of the thinner end's 5 cells per side."""
+    small, large = [0.5, 0.4, 0.55, 0.45, 0.5], [0.8, 0.75, 0.9, 0.8, 0.85]
+    pick = [0.7, 0.65, 0.8, 0.75, 0.7]
+    rows = rows_of({"train": TRAIN, "table_pos": small}, n=5) + rows_of({"train": TRAIN, "table_pos": large}, n=20)
+    rows += rows_of({"train": PICK_TRAIN, "table_pos": pick}, task="pick-place", n=wider)
+    found, (c,) = decide_one(claim("trend", factors=["table_pos"], over="n", direction="shrinks"), cfg, rows)
+    door = {5: np.subtract(TRAIN, small), 20: np.subtract(TRAIN, large)}  # per seed
+    gap = {**door, wider: (door[wider] + np.subtract(PICK_TRAIN, pick)) / 2}  # the two tasks' mean at ``wider``
+    change = gap[20] - gap[5]  # wider 20: (0.1 + 0.1) / 2 - 0.4 = -0.3 on seed 0; wider 5: 0.1 - (0.4 + 0.1) / 2
+    p = np.mean(small + large + pick)  # three cells of five seeds each, equal episodes
+    check(found.comparisons[0], c, label="table_pos over N", threshold=0.0, sign=-1, point=change.mean(),
+          per_seed=change, headroom=gap[5].mean(),
+          resolvable=lambda e, z: power.difference_resolvable(max(1, round(5 * e)), p, z), verdict=AGREES,
+          level=0.95)  # fmt: skip
+
+
+PER_RADIUS = {0.025: [0.8, 0.75, 0.85, 0.8, 0.78], 0.05: [0.6, 0.55, 0.7, 0.6, 0.6], 0.075: [0.4, 0.4, 0.5, 0.35, 0.45]}
+
+
+def _radius_expected(direction: str, per_radius: dict) -> dict:
+    """``check``'s expectations for a camera_pos trend over the radius of one task at N = 5 (TRAIN at every width)."""
+    radii = np.array(list(per_radius))
+    gaps = np.array([np.subtract(TRAIN, per_radius[r]) for r in radii])  # (radius, seed)
+    dx = radii - radii.mean()
+    slopes = (dx @ (gaps - gaps.mean(axis=0))) / (dx @ dx) * 0.025  # least squares per seed, per radius step
+    start, span, p = gaps[0].mean(), len(radii) - 1, np.mean(per_radius[radii[-1]])
+    return dict(
+        label="camera_pos over the radius (per radius step)", threshold=0.0, sign=-1 if direction == "shrinks" else 1,
+        point=slopes.mean(), per_seed=slopes, headroom=(start if direction == "shrinks" else np.mean(TRAIN) - start) / span,
+        resolvable=lambda e, z: power.slope_resolvable(max(1, round(5 * e)), list(radii), p, z) * 0.025, level=0.95,
+    )  # fmt: skip
+
+
+def test_a_trend_over_the_radius_leaves_out_other_tasks_other_methods_and_rows_without_a_gap(cfg):
+    """The sweep of the claim's task and method, as in ``test_a_trend_over_the_radius``; placed first and left
+    out: the same sweep of another task and of another method (evaluated on 2000 episodes, enough to move the
+    median episode count of the table if they were in it), and a run at N = 20 whose shifted rows have no gap (its
+    train suite ran on other episode seeds)."""
+    rows = [
+        r
+        for (w, rad) in WIDTHS.items()
+        for r in rows_of({"train": PICK_TRAIN, "camera_pos": [0.7, 0.8, 0.75, 0.7, 0.8]}, task="pick-place",
+                         widths=w, radius=rad, episodes=2000)
+        + rows_of({"train": TRAIN, "camera_pos": CAMERA, "light": LIGHT}, method="bc_shift", widths=w, radius=rad,
+                  episodes=2000)
+    ]  # fmt: skip
+    no_gap = rows_of({"train": TRAIN, "camera_pos": [0.1] * 5}, n=20, widths="camera_pos=wide", radius=0.075)
+    rows += [{**r, "gap": None} if r["condition"] == "camera_pos" else r for r in no_gap]
+    rows += [
+        r
+        for (w, rad) in WIDTHS.items()
+        for r in rows_of({"train": TRAIN, "camera_pos": PER_RADIUS[rad]}, widths=w, radius=rad)
+    ]
+    c = claim("trend", factors=["camera_pos"], over="radius", direction="grows", task="door-open")
+    found, (comparison,) = decide_one(c, cfg, rows)
+    # what's left is the other test's sweep alone: 100 episodes per cell (the N = 20 train cells' count too)
+    check(found.comparisons[0], comparison, verdict=AGREES, **_radius_expected("grows", PER_RADIUS))
+
+
+def test_a_trend_over_two_radii_is_the_change_over_one_step(cfg):
+    """Two radii are enough for a slope: the gap at the wider one minus that at the narrower, over one step."""
+    two = {r: PER_RADIUS[r] for r in (0.025, 0.05)}
+    widths = {"default": 0.025, "camera_pos=medium": 0.05}
+    rows = [
+        r
+        for (w, rad) in widths.items()
+        for r in rows_of({"train": TRAIN, "camera_pos": two[rad]}, widths=w, radius=rad)
+    ]
+    c = claim("trend", factors=["camera_pos"], over="radius", direction="grows")
+    found, (comparison,) = decide_one(c, cfg, rows)
+    expected = _radius_expected("grows", two)
+    # the slope per step of two points is their difference: (0.8 - 0.6, 0.75 - 0.55, ...) = 0.2, 0.2, 0.15, 0.2, 0.18
+    assert expected["per_seed"] == pytest.approx(np.subtract(two[0.025], two[0.05]), abs=1e-12)
+    check(found.comparisons[0], comparison, verdict=AGREES, **expected)
+
+
+def test_the_smallest_effect_is_taken_at_the_comparisons_own_holm_level(cfg):
+    """A gap, a trend over N and a trend over the radius decided with a null comparison (light's gap is exactly 0
+    on every seed: p = 1, ranked last at 0.95): Holm decides the three at 1 - 0.05 / 4, / 3 and / 2, and each
+    one's smallest resolvable effect is the power code's at that level's z, not at 95%'s."""
+    small, large = [0.5, 0.4, 0.55, 0.45, 0.5], [0.8, 0.75, 0.9, 0.8, 0.85]
+    rows = rows_of({"train": TRAIN, "camera_pos": PER_RADIUS[0.025], "table_pos": small, "light": TRAIN}, radius=0.025)
+    rows += rows_of({"train": TRAIN, "table_pos": large}, n=20)
+    for w, rad in list(WIDTHS.items())[1:]:
+        rows += rows_of({"train": TRAIN, "camera_pos": PER_RADIUS[rad]}, widths=w, radius=rad)
+    found = decide(
+        [
+            claim("gap_opens", factors=["camera_pos"]),
+            claim("trend", factors=["table_pos"], over="n", direction="shrinks"),
+            claim("trend", factors=["camera_pos"], over="radius", direction="grows"),
+            claim("gap_opens", factors=["light"]),
+        ],
+        cfg,
+        rows,
+    )
+    (gap,), (over_n,), (over_radius,), (null,) = (v.comparisons for v in found)
+    assert (null.p_value, null.level) == (1.0, pytest.approx(0.95))
+    assert sorted(d.level for d in (gap, over_n, over_radius)) == pytest.approx(
+        [1 - 0.05 / 2, 1 - 0.05 / 3, 1 - 0.05 / 4]
+    )
+    radii = list(PER_RADIUS)
+    # 5 seeds x 100 episodes per side; P_T for the gap, the four cells' rate for N, the widest radius's for the slope
+    assert gap.smallest == pytest.approx(power.mean_resolvable_gap(500, np.mean(TRAIN), z_at(gap.level)), abs=1e-12)
+    p_n = np.mean(small + large)
+    assert over_n.smallest == pytest.approx(power.difference_resolvable(500, p_n, z_at(over_n.level)), abs=1e-12)
+    p_r, z_r = np.mean(PER_RADIUS[0.075]), z_at(over_radius.level)
+    assert over_radius.smallest == pytest.approx(power.slope_resolvable(500, radii, p_r, z_r) * 0.025, abs=1e-12)
+
+
+ALL, NONE, HALF = [1.0] * 5, [0.0] * 5, [0.5] * 5
+
+
+def _first_seed(rows: list[dict]) -> list[dict]:
+    return [r for r in rows if r["seed"] == SEEDS[0]]
+
+
+def _two_episodes(condition: str, **where) -> list[dict]:
+    """``condition``'s row of one success in two episodes (train: one of one), without its train row."""
+    rows = rows_of({"train": ALL, condition: HALF}, episodes=2, **where)
+    return [r for r in _first_seed(rows) if r["condition"] == condition]
+
+
+ONE_EPISODE = {  # one seed, one episode per cell (two in one cell of the pair and of the sweep, for a rate of 0.5)
+    # a gap of 1 at P_T = 1 over one episode pair
+    "gap": (
+        claim("gap_opens", factors=["camera_pos"]),
+        lambda: rows_of({"train": ALL, "camera_pos": NONE}, episodes=1),
+        lambda z: power.mean_resolvable_gap(1, 1.0, z),
+    ),
+    # the gap closes from 1 at N = 5 to 0 at N = 20: the two cells' rate is (0 + 1) / 2
+    "over N": (
+        claim("trend", factors=["table_pos"], over="n", direction="shrinks"),
+        lambda: (
+            rows_of({"train": ALL, "table_pos": NONE}, episodes=1)
+            + rows_of({"train": ALL, "table_pos": ALL}, episodes=1, n=20)
+        ),
+        lambda z: power.difference_resolvable(1, 0.5, z),
+    ),
+    # camera_pos succeeds at 0.025, fails at 0.05, succeeds once in two at 0.075 (median of 1, 1, 1, 1, 1, 2: 1)
+    "over the radius": (
+        claim("trend", factors=["camera_pos"], over="radius", direction="grows"),
+        lambda: (
+            rows_of({"train": ALL, "camera_pos": ALL}, episodes=1, radius=0.025)
+            + rows_of({"train": ALL, "camera_pos": NONE}, episodes=1, widths="camera_pos=medium", radius=0.05)
+            + rows_of({"train": ALL}, episodes=1, widths="camera_pos=wide")
+            + _two_episodes("camera_pos", widths="camera_pos=wide", radius=0.075)
+        ),
+        lambda z: power.slope_resolvable(1, list(PER_RADIUS), 0.5, z) * 0.025,
+    ),
+    # light, the harder factor, succeeds once in two: P_min 0.5 (median count of 1, 1, 1, 2: 1)
+    "pair": (
+        claim("pair", pair="camera_pos+light", relation="synergistic"),
+        lambda: (
+            rows_of({"train": ALL, "camera_pos": ALL, "camera_pos+light": NONE}, episodes=1) + _two_episodes("light")
+        ),
+        lambda z: power.pair_metric_resolvable(1, 0.5, z),
+    ),
+}
+
+
+@pytest.mark.parametrize("kind", list(ONE_EPISODE))
+def test_one_seed_of_one_episode_per_cell_resolves_what_one_episode_pair_does(cfg, kind):
+    """One seed (so no interval), one cell per side of one episode: the smallest effect is the power code's for
+    one episode pair, not two."""
+    c, make_rows, resolvable = ONE_EPISODE[kind]
+    (found,) = decide([c], cfg, _first_seed(make_rows()))
+    (d,) = found.comparisons
+    assert (d.seeds, d.level, d.low) == (1, pytest.approx(0.95), pytest.approx(math.nan, nan_ok=True))
+    assert d.smallest == pytest.approx(resolvable(z_at(0.95)), abs=1e-12)
+
+
+def test_a_pair_run_on_some_of_the_tasks_of_its_factors_has_no_comparison(cfg):
+    """camera_pos and light on both tasks, their pair on door-open alone: the cells do not line up (2, 2, 1), so
+    there is no comparison; nor for a method without any rows."""
+    rows = rows_of({"train": TRAIN, "camera_pos": CAMERA, "light": LIGHT}, task="pick-place")
+    rows += rows_of({"train": TRAIN, "camera_pos": CAMERA, "light": LIGHT, "camera_pos+light": CAMERA})
+    for c in (claim("pair", pair="camera_pos+light"), claim("pair", pair="camera_pos+light", method="bc_shift")):
+        (found,) = decide([c], cfg, rows)
+        assert (found.comparisons, found.verdict) == ([], NOT_RESOLVED)
+
+
+def test_a_pairs_smallest_effect_is_at_the_harder_factor_whichever_is_named_second(cfg):
+    """The pair's second factor (light) is the harder: P_min is light's rate, 0.48, not camera_pos's 0.78 (nor the
+    table's mean rate, (0.896 + 0.78 + 0.48 + 0.204) / 4 = 0.59)."""
+    worse = [0.2, 0.25, 0.15, 0.2, 0.22]
+    rates = {"train": TRAIN, "camera_pos": LIGHT, "light": CAMERA, "camera_pos+light": worse}
+    c = claim("pair", pair="camera_pos+light", relation="synergistic", task="door-open", tolerance=0.1)
+    found, (comparison,) = decide_one(c, cfg, rows_of(rates, episodes=PAIR_EPISODES))
+    p_min = np.mean(CAMERA)
+    check(found.comparisons[0], comparison, label="camera_pos+light metric < -0.1", threshold=-0.1, sign=-1,
+          point=float(_pair_metric(np.mean(worse), np.mean(LIGHT), np.mean(CAMERA))),
+          per_seed=_pair_metric(worse, LIGHT, CAMERA), headroom=0.9,
+          resolvable=lambda e, z: power.pair_metric_resolvable(max(1, round(5 * e)), p_min, z), verdict=AGREES,
+          level=0.95, episodes=PAIR_EPISODES)  # fmt: skip
+
+
+def test_a_pair_is_matched_to_its_factors_cell_by_cell_whatever_order_the_rows_come_in(cfg):
+    """Pair rows of pick-place seen before door-open's rows (a merged or hand-made results file): each task's
+    pair is still compared with that task's factors. door-open: pair 0.3 against camera_pos 0.5 and light 0.8,
+    metric (0.3 - 0.5) / 0.5 = -0.4; pick-place: pair 0.6 against 0.7 and 0.9, (0.6 - 0.7) / 0.7 = -1/7; the
+    point is their mean, -0.2714. Matched by position in first-seen order, the pair of one task met the other's."""
+    door = {"train": [0.95] * 5, "camera_pos": [0.5] * 5, "light": [0.8] * 5, "camera_pos+light": [0.3] * 5}
+    pick = {"train": [0.95] * 5, "camera_pos": [0.7] * 5, "light": [0.9] * 5, "camera_pos+light": [0.6] * 5}
+    rows_door, rows_pick = rows_of(door), rows_of(pick, task="pick-place")
+    in_plan_order = rows_door + rows_pick
+    is_pair = [r["condition"] == "camera_pos+light" for r in rows_pick]
+    pair_first = (
+        [r for r, p in zip(rows_pick, is_pair) if p] + rows_door + [r for r, p in zip(rows_pick, is_pair) if not p]
+    )
+    c = claim("pair", pair="camera_pos+light", relation="within", tolerance=0.06)
+    expected = (-0.4 - 1 / 7) / 2
+    for rows in (in_plan_order, pair_first):
+        (found,) = decide([c], cfg, rows)
+        assert found.comparisons[0].point == pytest.approx(expected, abs=1e-12)
+
+
+def test_a_claim_on_rows_without_episode_counts_is_decided_without_a_resolvable_effect(cfg):
+    """Rows whose episode counts are unknown (0) still give a point and a seed-level interval; the smallest
+    resolvable effect needs counts, so it is NaN (it raised on round(NaN))."""
+    rows = rows_of({"train": TRAIN, "camera_pos": CAMERA, "light": LIGHT}, episodes=0)
+    for row in rows:
+        row["successes"] = None
+    (found,) = decide([claim("gap_opens", factors=["camera_pos"])], cfg, rows)
+    (comparison,) = found.comparisons
+    assert comparison.point == pytest.approx(float(np.mean(np.subtract(TRAIN, CAMERA))), abs=1e-12)
+    assert math.isnan(comparison.smallest)

@@ -264,12 +264,23 @@ def _trend_comparison(claim: ClaimConfig, method: str, rows: Sequence[dict]) -> 
                       lambda e, z: slope_resolvable(max(1, round(m * e)), radii, p, z) * step)  # fmt: skip
 
 
+def _matched_columns(table: Cells, method: str, conditions: Sequence[str]) -> list[list[int]] | None:
+    """Each condition's columns, position ``i`` the same cell (task, N, widths) for all of them; ``None`` unless
+    every condition ran in the same non-empty set of cells. Columns follow the order rows were first seen, which
+    a merged or hand-made results file may give each condition differently."""
+    by_cell = [{k[:4]: i for i, k in enumerate(table.keys) if k[0] == method and k[4] == c} for c in conditions]
+    if not by_cell[0] or any(d.keys() != by_cell[0].keys() for d in by_cell[1:]):
+        return None
+    return [[d[cell] for cell in by_cell[0]] for d in by_cell]
+
+
 def _pair_comparisons(claim: ClaimConfig, method: str, rows: Sequence[dict]) -> list[Comparison | None]:
     a, b = claim.pair.split(PAIR_SEPARATOR)
     table = _gap_table(rows, [method], [a, b, claim.pair], claim.task)
-    ca, cb, cab = (_columns(table, method, [c]) for c in (a, b, claim.pair))
-    if not (ca and cb and cab) or not (len(ca) == len(cb) == len(cab)):
+    matched = _matched_columns(table, method, (a, b, claim.pair))
+    if matched is None:
         return [None]
+    ca, cb, cab = matched
 
     def statistic(r: np.ndarray, n: np.ndarray) -> np.ndarray:
         pooled = pooled_rates(r, n)  # (B, C): per task x N, pooled over seeds, then the metric's mean
@@ -403,7 +414,8 @@ def decide(claims: Sequence[ClaimConfig], cfg: StudyConfig, rows: Sequence[dict]
         level = 1 - ALPHA / (len(order) - rank)
         low, high = decision_interval(ev.reps, ev.per_seed, level)
         z = float(stats.norm.ppf(1 - (1 - level) / 2))
-        smallest = c.resolvable(_episodes(c.table), z)
+        episodes = _episodes(c.table)
+        smallest = c.resolvable(episodes, z) if np.isfinite(episodes) else math.nan  # counts unknown: no power
         verdict = _verdict(c, low, high, smallest)
         if stopped and verdict in (AGREES, DISAGREES):
             verdict = NOT_RESOLVED  # Holm: nothing after the first comparison left unresolved is resolved
