@@ -53,7 +53,9 @@ PUBLISHED = {
     "f7_object_texture_images": ROOT / "docs" / "findings.md",
     "f7_object_texture_colours": ROOT / "docs" / "findings.md",
     "f7_object_texture_168px": ROOT / "docs" / "findings.md",
-    "bp60_cap500": ROOT / "docs" / "findings.md",
+    "learning_curve": ROOT / "docs" / "bc.md",
+    "learning_curve_bin-picking_500": ROOT / "docs" / "findings.md",
+    "learning_curve_n20": ROOT / "docs" / "findings.md",
     "f2_gap_vs_n_pick-place": ROOT / "docs" / "findings.md",
     "f2_gap_vs_n_door-open": ROOT / "docs" / "findings.md",
     "f2_gap_vs_n_400_demos": ROOT / "docs" / "findings.md",
@@ -339,29 +341,3 @@ def test_a_fence_names_one_section_and_one_of_its_tables():
     assert fence[0].body == fenced_body("| b |\n|---|")
     assert find_fences('```markdown\n<!-- results: quick "X" -->\n```\n', docs) == []  # an example, not a fence
     assert sync_docs([], {}) == []
-
-
-# --- learning curves (scripts/learning_curve.py) quoted in docs/findings.md ----------------------------------
-
-CURVES = ROOT / RESULTS_ROOT / "curves"
-LEARNING_CURVE = ROOT / "scripts" / "learning_curve.py"
-
-
-def test_every_committed_learning_curve_regenerates_the_table_docs_findings_quotes(tmp_path):
-    """Each ``docs/results/curves/<run>/`` (curve.csv, settings.json) rebuilds its curve.md with ``--report``,
-    and docs/findings.md quotes that table verbatim, so a documented P_T can never drift from its data."""
-    runs = sorted(p for p in CURVES.iterdir() if (p / "curve.csv").is_file())
-    assert runs, f"no committed learning curve under {CURVES}"
-    findings = (ROOT / "docs" / "findings.md").read_text()
-    for run in runs:
-        copy = tmp_path / run.name
-        copy.mkdir()
-        for name in ("curve.csv", "settings.json"):
-            shutil.copy(run / name, copy / name)
-        done = subprocess.run(
-            [sys.executable, str(LEARNING_CURVE), "--report", f"--out={copy}"], capture_output=True, text=True
-        )
-        assert done.returncode == 0, done.stderr
-        table = (copy / "curve.md").read_text().split("\n\n", 1)[1].strip()
-        assert (run / "curve.md").read_text() == (copy / "curve.md").read_text(), f"{run}/curve.md is stale"
-        assert table in findings, f"docs/findings.md does not quote {run.name}'s table as curve.csv gives it"
