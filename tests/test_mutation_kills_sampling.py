@@ -138,14 +138,23 @@ def test_aside_reads_the_whole_state_of_any_bit_generator_a_caller_passes():
         assert table != free and table in sampling._Pools("train", images).texture.names
 
 
-def test_a_shape_folder_family_is_its_top_level_subfolder_for_the_look_alike_rule(tmp_path):
-    # two families of six meshes each; sampling only lists the files, so a one-vertex .obj is enough
+def _two_shape_families(folder: Path) -> SamplingOptions:
+    """A shape folder of two families, crab/ and moth/, of six meshes each (sampling only lists the files, so a
+    one-vertex .obj is enough), split by variant so that both families have files on each side."""
     for family in ("crab", "moth"):
-        (tmp_path / family).mkdir()
+        (folder / family).mkdir()
         for i in range(1, 7):
-            (tmp_path / family / f"{family}_{i}.obj").write_text("v 0 0 0\n")
-    # the variant split puts files of both families on the training side
-    options = SamplingOptions(shape_folder=str(tmp_path), asset_split="variant", n_distractors=2)
+            (folder / family / f"{family}_{i}.obj").write_text("v 0 0 0\n")
+    return SamplingOptions(shape_folder=str(folder), asset_split="variant", n_distractors=2)
+
+
+def _folder_family(name: str) -> str:
+    """The family a ``file:`` name of that folder belongs to: its subfolder."""
+    return Path(name.removeprefix("file:")).parent.name
+
+
+def test_a_shape_folder_family_is_its_top_level_subfolder_for_the_look_alike_rule(tmp_path):
+    options = _two_shape_families(tmp_path)
     pool = sampling._Pools("train", options).shape
     moths = [n for n in pool.names if "/moth/" in n]
     assert len(moths) >= 2 and len(moths) < len(pool.names)
@@ -153,7 +162,7 @@ def test_a_shape_folder_family_is_its_top_level_subfolder_for_the_look_alike_rul
 
     def families(scene):
         return [
-            Path(d.shape.removeprefix("file:")).parent.name
+            _folder_family(d.shape)
             for s in range(20)
             for d in sample_factor("distractors", "pick-place", np.random.default_rng(s), options=options, scene=scene)
         ]
@@ -199,17 +208,13 @@ def test_a_distractor_shifted_to_held_out_files_avoids_the_family_of_an_object_i
     # its family (its top-level subfolder) when a shift draws distractors from the held-out side. Before the
     # pool knew its folder, the inherited object's family was its own file name and 17 of 30 shifted
     # environments held a distractor of the object's family
-    for family in ("crab", "moth"):
-        (tmp_path / family).mkdir()
-        for i in range(1, 7):
-            (tmp_path / family / f"{family}_{i}.obj").write_text("v 0 0 0\n")
-    options = SamplingOptions(shape_folder=str(tmp_path), asset_split="variant", n_distractors=2)
+    options = _two_shape_families(tmp_path)
     base = sampling.sample_configs("pick-place", 5, seed=0, factors=["object_shape"], options=options)
-    objects = {Path(c.factors.object_shape.removeprefix("file:")).parent.name for c in base}
+    objects = {_folder_family(c.factors.object_shape) for c in base}
     assert objects <= {"crab", "moth"} and objects  # the objects come from the folder
     for split in ("train", "eval"):
         shifted = sampling.shift_configs(base, "distractors", 30, split=split, options=options)
         for config in shifted:
-            object_family = Path(config.factors.object_shape.removeprefix("file:")).parent.name
-            shown = {Path(d.shape.removeprefix("file:")).parent.name for d in config.factors.distractors}
+            object_family = _folder_family(config.factors.object_shape)
+            shown = {_folder_family(d.shape) for d in config.factors.distractors}
             assert object_family not in shown, (split, config.factors.object_shape, shown)
