@@ -2,7 +2,11 @@
 one-factor draw had no in-process test, the seed derivation of ``_aside`` (which every rule-breaking draw uses, so
 it decides scenes on every machine) was not pinned, and the distractors' placement was checked only for not
 failing: their yaw range, their footprint against each other and the task's keep-out boxes, and the errors named
-when the table or the shape pool leaves no room."""
+when the table or the shape pool leaves no room. Nor did an in-process test hold the options' bounds (rgb_fraction
+in [0, 1], 0 to 5 distractors) and their messages, the width a continuous draw reads, the defaults (training split,
+seed 0), what a configuration records (split, id, the family's content, a task row taken like its name), a shift's
+id, the exact edge of the colour-or-image draw, or the errors naming the pool where an object shape or a texture
+has no allowed name left."""
 
 from __future__ import annotations
 
@@ -13,7 +17,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from lerobot_factorworld.factors.registry import DISTRACTOR_AREA, DISTRACTOR_SIZE
+from lerobot_factorworld.factors.registry import DISTRACTOR_AREA, DISTRACTOR_SIZE, SceneObject
 from lerobot_factorworld.protocol import keepout, sampling
 from lerobot_factorworld.protocol.sampling import SamplingOptions, factor_rng, sample_factor, sample_factor_values
 
@@ -218,3 +222,148 @@ def test_a_distractor_shifted_to_held_out_files_avoids_the_family_of_an_object_i
             object_family = _folder_family(config.factors.object_shape)
             shown = {_folder_family(d.shape) for d in config.factors.distractors}
             assert object_family not in shown, (split, config.factors.object_shape, shown)
+
+
+def test_options_accept_their_documented_bounds_and_refuse_beyond_them_naming_the_range():
+    # rgb_fraction is a probability: both ends are valid, 1.5 and -0.1 are not
+    assert [SamplingOptions(rgb_fraction=p).rgb_fraction for p in (0.0, 1.0)] == [0.0, 1.0]
+    for bad in (1.5, -0.1):
+        with pytest.raises(ValueError, match=rf"^rgb_fraction must be in \[0, 1\], got {bad}$"):
+            SamplingOptions(rgb_fraction=bad)
+    # no distractor at all is a valid study (the object alone on the table): every environment gets an empty tuple
+    none = SamplingOptions(n_distractors=0)
+    assert sample_factor("distractors", TASK, np.random.default_rng(3), options=none) == ()
+    configs = sampling.sample_configs(TASK, 3, seed=2, factors=["distractors", "light"], options=none)
+    assert [c.factors.distractors for c in configs] == [(), (), ()]
+    assert SamplingOptions(n_distractors=5).n_distractors == 5  # MAX_DISTRACTORS itself is valid
+    for bad in (-1, 6):
+        with pytest.raises(ValueError, match=rf"^n_distractors must be in \[0, 5\], got {bad}$"):
+            SamplingOptions(n_distractors=bad)
+
+
+def test_a_continuous_factor_is_drawn_from_the_width_the_options_name():
+    # door-open's camera_pos has no task limit: narrow (the default) is +-0.025 per component, wide +-0.075, so a
+    # draw is low + (high - low) * u with the stream's next seven uniforms u
+    u = np.random.default_rng(11).random(7)
+    default = sample_factor("camera_pos", TASK, np.random.default_rng(11))
+    wide = sample_factor("camera_pos", TASK, np.random.default_rng(11), options=SamplingOptions(widths={"camera_pos": "wide"}))  # fmt: skip
+    assert default == pytest.approx(tuple(-0.025 + 0.05 * u), rel=1e-12, abs=1e-15)
+    assert wide == pytest.approx(tuple(-0.075 + 0.15 * u), rel=1e-12, abs=1e-15)
+    # the width of one factor leaves the others at theirs: light keeps its only ("paper") range [0.2, 0.8]^2
+    options = SamplingOptions(widths={"camera_pos": "medium"})
+    (grid,) = sample_factor_values(TASK, ["camera_pos", "light"], n=1, seed=4, options=options)
+    u_cam, u_light = factor_rng(4, "train", "camera_pos").random(7), factor_rng(4, "train", "light").random(2)
+    assert grid.camera_pos == pytest.approx(tuple(-0.05 + 0.1 * u_cam), rel=1e-12, abs=1e-15)
+    assert grid.light == pytest.approx(tuple(0.2 + 0.6 * u_light), rel=1e-12, abs=1e-15)
+
+
+def _one_shape_per_family() -> tuple:
+    pool = sampling._Pools("train", SamplingOptions()).shape
+    first = {pool.family_of(name): name for name in reversed(pool.names)}  # the family's first name
+    return tuple(SceneObject(shape=first[f], x=0.0, y=0.0, yaw=0.0, size=0.1, texture="proc:camo-010") for f in sorted(first))  # fmt: skip
+
+
+def test_an_object_shape_with_every_family_taken_by_a_distractor_is_refused_naming_the_shape_pool():
+    distractors = _one_shape_per_family()
+    pool = sampling._Pools("train", SamplingOptions()).shape
+    # one family left free: every draw (a rule-breaking one is replaced) lands in it
+    free = pool.family_of(distractors[0].shape)
+    shapes = [
+        sample_factor("object_shape", "pick-place", np.random.default_rng(s), scene={"distractors": distractors[1:]})
+        for s in range(6)
+    ]
+    assert {pool.family_of(s) for s in shapes} == {free} and len(set(shapes)) > 1
+    with pytest.raises(ValueError, match=r"^no object shape in the shape pool obeys the rules between factors \(all excluded\)$"):  # fmt: skip
+        sample_factor("object_shape", "pick-place", np.random.default_rng(0), scene={"distractors": distractors})
+
+
+def test_a_texture_pool_with_no_allowed_image_is_refused_naming_the_texture_pool(tmp_path):
+    # two families of one image each: the family split gives the training side wood/ alone (brick/ is held out)
+    for family in ("brick", "wood"):
+        (tmp_path / family).mkdir()
+        (tmp_path / family / f"{family}.png").write_bytes(b"")  # sampling only lists the files
+    options = SamplingOptions(texture_folder=str(tmp_path), rgb_fraction=0.0)
+    (wood,) = sampling._Pools("train", options).texture.names
+    assert wood.endswith("/wood/wood.png")
+    assert sample_factor("object_texture", TASK, np.random.default_rng(0), options=options) == wood
+    # beside a wood table the object has no image left
+    with pytest.raises(ValueError, match=r"^no texture in the texture pool obeys the rules between factors \(all excluded\)$"):  # fmt: skip
+        sample_factor("object_texture", TASK, np.random.default_rng(0), options=options, scene={"table_texture": wood})
+
+
+# PCG64 steps its 128-bit state (state * MULTIPLIER + inc mod 2**128), then outputs the xor of the new state's
+# halves rotated right by its top 6 bits; random() is that output's top 53 bits times 2**-53
+PCG64_MULTIPLIER = 0x2360ED051FC65DA44385DF649FCCF645
+
+
+def _rng_whose_next_random_is(u: float) -> np.random.Generator:
+    """A PCG64 generator whose next ``random()`` is exactly ``u`` (a multiple of 2**-53): its stepped state is
+    ``k << 11`` (high half 0, so no rotation and the output is the low half, ``k << 11``), for ``u = k * 2**-53``."""
+    k, inc = int(u * 2**53), (1 << 100) + 1  # inc: any odd number
+    assert k * 2.0**-53 == u
+    before = ((k << 11) - inc) * pow(PCG64_MULTIPLIER, -1, 2**128) % 2**128
+    rng = np.random.Generator(np.random.PCG64())
+    rng.bit_generator.state = {"bit_generator": "PCG64", "state": {"state": before, "inc": inc}, "has_uint32": 0, "uinteger": 0}  # fmt: skip
+    return rng
+
+
+def test_a_texture_is_a_colour_exactly_when_its_uniform_draw_is_below_rgb_fraction():
+    assert _rng_whose_next_random_is(0.5).random() == 0.5 and _rng_whose_next_random_is(0.0).random() == 0.0
+    # P(u < p) = p for u uniform on the 2**-53 grid of [0, 1): u == p gives an image, the grid point below a colour;
+    # so rgb_fraction 0 ("images only") never gives a colour, not even for a draw of exactly 0
+    for p in (0.0, 0.25, 0.5):
+        options = SamplingOptions(rgb_fraction=p)
+        at_p = sample_factor("table_texture", TASK, _rng_whose_next_random_is(p), options=options)
+        assert not at_p.startswith("rgb:"), (p, at_p)
+        if p > 0:
+            below = sample_factor("table_texture", TASK, _rng_whose_next_random_is(p - 2**-53), options=options)
+            assert below.startswith("rgb:"), (p, below)
+
+
+def test_sampling_defaults_are_the_training_split_and_seed_0():
+    factors = ["light", "table_texture"]
+    train = sample_factor_values(TASK, factors, n=3, seed=5, split="train")
+    assert sample_factor_values(TASK, factors, n=3, seed=5) == train
+    assert sample_factor_values(TASK, factors, n=3, seed=5, split="eval") != train
+    seed0 = sampling.sample_configs(TASK, 3, seed=0, factors=factors)
+    assert sampling.sample_configs(TASK, 3, factors=factors) == seed0
+    assert sampling.sample_configs(TASK, 3, seed=1, factors=factors) != seed0
+    shifted = sampling.shift_configs(seed0, "light", 4, seed=0)
+    assert sampling.shift_configs(seed0, "light", 4) == shifted
+    assert sampling.shift_configs(seed0, "light", 4, seed=1) != shifted
+
+
+def test_configs_record_their_task_split_id_and_the_familys_content(monkeypatch):
+    from lerobot_factorworld.families import family_of
+    from lerobot_factorworld.pick.sampling import sample_layouts
+    from lerobot_factorworld.tasks import get_task
+
+    options = SamplingOptions(n_objects=3)
+    configs = sampling.sample_configs("pick", 3, seed=4, split="eval", factors=["light"], options=options)
+    assert [c.env_id for c in configs] == ["pick/eval/000", "pick/eval/001", "pick/eval/002"]
+    assert [c.split for c in configs] == ["eval"] * 3  # not SceneConfig's default, "train"
+    # the content is the family's layouts from their own stream (seed 4, eval, 3 objects), one per environment
+    assert [c.content for c in configs] == sample_layouts(3, 4, "eval", 3)
+    assert len({c.content for c in configs}) == 3 and all(len(c.content.objects) == 3 for c in configs)
+    # a task row works as its name does, and the family's hook is handed that row (a family may read it)
+    seen = []
+    family = family_of("pick")
+    real = family.sample_contents
+    monkeypatch.setattr(family, "sample_contents", lambda task, *rest: seen.append(task) or real(task, *rest))
+    row = get_task("pick")
+    assert sampling.sample_configs(row, 3, seed=4, split="eval", factors=["light"], options=options) == configs
+    assert seen == [row]
+    with pytest.raises(ValueError, match=r"^the number of environments must be at least 1, got 0$"):
+        sampling.sample_configs(TASK, 0)
+
+
+def test_shifted_configs_are_named_by_the_shifted_factors_and_refuse_an_empty_base():
+    base = sampling.sample_configs(TASK, 2, seed=3, factors=["light"])
+    assert [c.env_id for c in base] == ["door-open/train/000", "door-open/train/001"]
+    pair = sampling.shift_configs(base, ("light", "camera_pos"), 3)
+    assert [c.env_id for c in pair] == [f"door-open/shift-light+camera_pos/00{j}" for j in range(3)]
+    assert [c.split for c in pair] == ["eval"] * 3
+    one = sampling.shift_configs(base, "table_texture", 2, split="train")
+    assert [c.env_id for c in one] == ["door-open/shift-table_texture/000", "door-open/shift-table_texture/001"]
+    with pytest.raises(ValueError, match=r"^shift_configs needs at least one base configuration$"):
+        sampling.shift_configs([], "light", 2)
