@@ -289,6 +289,13 @@ def test_a_texture_pool_with_no_allowed_image_is_refused_naming_the_texture_pool
     # beside a wood table the object has no image left
     with pytest.raises(ValueError, match=r"^no texture in the texture pool obeys the rules between factors \(all excluded\)$"):  # fmt: skip
         sample_factor("object_texture", TASK, np.random.default_rng(0), options=options, scene={"table_texture": wood})
+    # ... but a draw that asks for a colour needs no image: every colour draw beside the wood table is a colour
+    colours = SamplingOptions(texture_folder=str(tmp_path), rgb_fraction=1.0)
+    drawn = [
+        sample_factor("object_texture", TASK, np.random.default_rng(s), options=colours, scene={"table_texture": wood})
+        for s in range(5)
+    ]
+    assert all(t.startswith("rgb:") for t in drawn) and len(set(drawn)) == 5
 
 
 # PCG64 steps its 128-bit state (state * MULTIPLIER + inc mod 2**128), then outputs the xor of the new state's
@@ -367,3 +374,15 @@ def test_shifted_configs_are_named_by_the_shifted_factors_and_refuse_an_empty_ba
     assert [c.env_id for c in one] == ["door-open/shift-table_texture/000", "door-open/shift-table_texture/001"]
     with pytest.raises(ValueError, match=r"^shift_configs needs at least one base configuration$"):
         sampling.shift_configs([], "light", 2)
+
+
+def test_shifted_configs_refuse_no_factor_no_environment_and_a_base_of_two_tasks():
+    base = sampling.sample_configs(TASK, 2, seed=3, factors=["light"])
+    with pytest.raises(ValueError, match=r"^shift_configs needs at least one factor to shift$"):
+        sampling.shift_configs(base, (), 2)
+    with pytest.raises(ValueError, match=r"^the number of environments must be at least 1, got 0$"):
+        sampling.shift_configs(base, "light", 0)
+    # a pick-place environment must not come out named door-open/... with door-open's ranges
+    mixed = [*base, *sampling.sample_configs("pick-place", 1, seed=3, factors=["light"])]
+    with pytest.raises(ValueError, match=r"^shift_configs needs base configurations of one task, got \['door-open', 'pick-place'\]$"):  # fmt: skip
+        sampling.shift_configs(mixed, "object_pos", 2)

@@ -221,7 +221,14 @@ def shift_configs(
     factors = (factors,) if isinstance(factors, str) else tuple(factors)
     if not base:
         raise ValueError("shift_configs needs at least one base configuration")
-    task = get_task(base[0].task)
+    if not factors:
+        raise ValueError("shift_configs needs at least one factor to shift")
+    if n < 1:
+        raise ValueError(f"the number of environments must be at least 1, got {n}")
+    tasks = sorted({c.task for c in base})
+    if len(tasks) > 1:
+        raise ValueError(f"shift_configs needs base configurations of one task, got {tasks}")
+    task = get_task(tasks[0])
     tag = "+".join(factors)
     new_values = sample_factor_values(task, factors, n, seed, split, options, base=[c.factors for c in base])
     out = []
@@ -296,8 +303,14 @@ def _sample_texture(rng: np.random.Generator, pool: _Pool, options: SamplingOpti
     # Always draw both numbers so the RNG stream does not depend on rgb_fraction's outcome.
     use_rgb = rng.random() < options.rgb_fraction
     rgb = format_rgb(tuple(rng.random(3)))
-    name = _draw(rng, pool, lambda texture: texture not in avoid, "texture")
-    return rgb if use_rgb and rgb not in avoid else name
+    colour = use_rgb and rgb not in avoid
+    try:
+        name = _draw(rng, pool, lambda texture: texture not in avoid, "texture")
+    except ValueError:  # every image is excluded: a problem only when the draw asked for an image
+        if colour:
+            return rgb
+        raise
+    return rgb if colour else name
 
 
 def _sample_distractors(
