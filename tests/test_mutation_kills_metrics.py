@@ -1,7 +1,10 @@
 """The study's numbers (study/metrics.py) where mutation testing found the suite silent (docs/testing.md), each
-against values computed by hand: a gap over one episode pair and over none, gaps of +-1,
-Newcombe's continuity-corrected phi, the standard error of two seeds, ranks tied at the end, slopes of undefined
-rows without a warning."""
+against values computed by hand: a gap over one episode pair and over none, gaps of +-1 (their intervals
+clamped to [-1, 1] where the formula rounds past), Wilson intervals clamped to [0, 1] likewise, Newcombe's
+continuity-corrected phi, the standard error of two seeds, ranks tied at the end, slopes of undefined rows without
+a warning, average ranks, Spearman's rho of a constant ranking, pooled rates of unknown episode counts, weighted
+means of undefined values, the share of defined replicates an interval needs, and the seed bootstrap's shapes,
+its cells of one episode and its rates rounded just past 0 or 1."""
 
 from __future__ import annotations
 
@@ -111,3 +114,37 @@ def test_the_bootstrap_refuses_other_shapes_and_draws_exactly_n_boot():
 def test_a_wilson_interval_of_more_successes_than_episodes_is_refused_naming_both():
     with pytest.raises(ValueError, match=r"^successes must be in \[0, 10\], got 11$"):
         metrics.wilson_interval(11, 10)
+
+
+def test_a_wilson_interval_at_0_or_n_successes_ends_exactly_at_0_or_1():
+    # 16 of 16: p = 1, so centre + half = (1 + z^2/2n + z^2/2n) / (1 + z^2/n) = 1, which the formula rounds to
+    # 1 + 2^-52; the low end is n / (n + z^2) = 16 / (16 + 3.8415) = 0.8064
+    low, high = metrics.wilson_interval(16, 16)
+    assert high == 1.0 and low == pytest.approx(0.8064, abs=1e-4)
+    # 0 of 21: centre - half = 0, rounded to -1.4e-17; the high end is z^2 / (n + z^2) = 3.8415 / 24.8415 = 0.1546
+    low, high = metrics.wilson_interval(0, 21)
+    assert low == 0.0 and high == pytest.approx(0.1546, abs=1e-4)
+
+
+def test_a_gap_of_minus_or_plus_one_over_25_pairs_ends_exactly_at_minus_or_plus_one():
+    # P_T = 0 (Wilson 0..0.1332: 3.8415 / 28.8415), P_F = 1 (Wilson 0.8668..1), an empty margin so phi = 0: the low
+    # end -1 - sqrt((P_T - l_T)^2 + (u_F - P_F)^2) is -1, but Wilson's ends miss by rounding (l_T = 1.4e-17,
+    # u_F = 1 - 2^-53), so the formula gives -1 - 2^-52; the high end -1 + sqrt(0.1332^2 + 0.1332^2) = -0.8116
+    gap, low, high = metrics.paired_gap([False] * 25, [True] * 25)
+    assert (gap, low) == (-1.0, -1.0) and high == pytest.approx(-0.8116, abs=1e-4)
+    gap, low, high = metrics.paired_gap([True] * 25, [False] * 25)  # the mirror image
+    assert (gap, high) == (1.0, 1.0) and low == pytest.approx(0.8116, abs=1e-4)
+
+
+def test_rates_rounded_just_past_0_or_1_are_resampled_as_0_and_1():
+    # seed 0: counts unknown, its rates 0.4 and 0.7 are kept; seed 1: rates computed as 0.3 - 0.1 - 0.2 = -2.8e-17
+    # and 0.1 x 3 / 0.3 = 1 + 2^-52 over 10 and 20 episodes, resampled as Binomial(10, 0) = 0 and Binomial(20, 1) = 20
+    # (numpy refuses a probability outside [0, 1]). Per cell the mean over the two seeds drawn: cell 0 is 0.4 (seed 0
+    # twice), 0.2 or 0 (seed 1 twice); cell 1 is 0.7, 0.85 or 1. Each extreme is drawn in about 1/4 of the 2000
+    # replicates, so the percentile interval is exactly (0, 0.4) and (0.7, 1)
+    rates = np.array([[0.4, 0.7], [0.3 - 0.1 - 0.2, 0.1 * 3 / 0.3]])
+    episodes = np.array([[0, 0], [10, 20]])
+    point, reps = metrics.seed_bootstrap(rates, episodes, lambda r, n: r.mean(axis=-2))
+    assert point == pytest.approx([0.2, 0.85])
+    low, high = metrics.percentile_interval(reps)
+    assert (low.tolist(), high.tolist()) == ([0.0, 0.7], [0.4, 1.0])
