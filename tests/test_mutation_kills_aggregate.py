@@ -629,3 +629,25 @@ def test_rows_of_other_methods_conditions_and_runs_do_not_move_an_interval():
     assert aggregate.radius_slopes([*RADIUS4, *other, unswept], ["camera_pos"]) == slopes
     # the slope: mean gaps 0.3125 at 0.025 m and 0.6875 at 0.075 m: 0.375 / 0.05 = 7.5 per metre
     assert slopes[("bc", "camera_pos")][0] == pytest.approx(7.5)
+
+
+def test_method_rho_differences_resample_only_the_seeds_of_the_methods_compared():
+    """Two seeds of bc and aug, and (placed first) rows of another method on a third seed: the bootstrap draws
+    from bc's and aug's two seeds alone. Gaps light, camera_pos, table_texture: bc seed 0 0.75, 0.5, 0.125, seed
+    1 0.25, 0.625, 0.125; aug seed 0 0.625, 0.5, 0.125, seed 1 0.25, 0.75, 0.125. With a share w of the seeds
+    drawn being seed 0, light's gap exceeds camera_pos's (rho 1, else 0.5) where w > 0.6 for bc (0.25 w - 0.375
+    (1 - w) > 0) and w > 0.8 for aug (0.125 w - 0.5 (1 - w) > 0). Two seeds give w = 0, 1/2 or 1: the two rhos
+    are equal on every resample. A third seed drawn too would give w = 2/3 (seeds 0, 0, 1: bc 1, aug 0.5) in
+    about 3 / 27 of the replicates, a difference of -0.5 inside the interval."""
+    other = runs([(2, {"method": "rt1"}, {"train": 1.0, "light": 0.5})])
+    bc = [
+        (0, {}, {"train": 1.0, "light": 0.25, "camera_pos": 0.5, "table_texture": 0.875}),
+        (1, {}, {"train": 1.0, "light": 0.75, "camera_pos": 0.375, "table_texture": 0.875}),
+    ]
+    aug = [
+        (0, {"method": "aug"}, {"train": 1.0, "light": 0.375, "camera_pos": 0.5, "table_texture": 0.875}),
+        (1, {"method": "aug"}, {"train": 1.0, "light": 0.75, "camera_pos": 0.25, "table_texture": 0.875}),
+    ]
+    found = aggregate.method_rho_differences([*other, *runs(bc), *runs(aug)], ["bc", "aug"], list(REFERENCE), REFERENCE)
+    # the point (w = 1/2): both rank camera_pos, light, table_texture (rho 0.5); each rho is 0.5 at w = 0, 1 at w = 1
+    assert plain(found) == plain({"aug": ((0.5, 0.5, 1.0), (0.0, 0.0, 0.0))})

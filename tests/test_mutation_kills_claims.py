@@ -5,11 +5,15 @@ every comparison of every kind (both trend directions, over N and over the radiu
 decided on synthetic rows whose per-seed statistic is computed by hand, and each field of its ``Decided`` is
 checked against the module docstring's recipe: the point, the hull of the bootstrap's percentile interval and the
 t-interval over seeds at Holm's level, the larger of the two p-values, the headroom the success rates leave, the
-smallest effect the power code resolves, and the episodes and seeds that would resolve the observed effect."""
+smallest effect the power code resolves, and the episodes and seeds that would resolve the observed effect.
+Then the rows each comparison leaves out (other tasks and methods, factors without rows, rows without a gap), the
+cells its smallest effect counts and the Holm level it is taken at, rows without their train rows (NaN, and no
+warning), and which claims a study tests (its own, else the paper's ordering)."""
 
 from __future__ import annotations
 
 import math
+import warnings
 
 import numpy as np
 import pytest
@@ -469,6 +473,12 @@ ONE_EPISODE = {  # one seed, one episode per cell (two in one cell of the pair a
         ),
         lambda z: power.slope_resolvable(1, list(PER_RADIUS), 0.5, z) * 0.025,
     ),
+    # camera_pos fails, light succeeds: the two cells' rate is (0 + 1) / 2
+    "difference": (
+        claim("gap_exceeds", factors=["camera_pos", "light"]),
+        lambda: rows_of({"train": ALL, "camera_pos": NONE, "light": ALL}, episodes=1),
+        lambda z: power.difference_resolvable(1, 0.5, z),
+    ),
     # light, the harder factor, succeeds once in two: P_min 0.5 (median count of 1, 1, 1, 2: 1)
     "pair": (
         claim("pair", pair="camera_pos+light", relation="synergistic"),
@@ -546,3 +556,96 @@ def test_a_claim_on_rows_without_episode_counts_is_decided_without_a_resolvable_
     (comparison,) = found.comparisons
     assert comparison.point == pytest.approx(float(np.mean(np.subtract(TRAIN, CAMERA))), abs=1e-12)
     assert math.isnan(comparison.smallest)
+
+
+def test_a_gap_claim_leaves_out_shifted_rows_without_a_gap(cfg):
+    """``test_a_gap_that_opens``'s rows, after (placed first) a run at N = 20 whose camera_pos rows have no gap (its
+    train suite ran on other episode seeds): those cells are left out, as the gap summaries leave them out, though
+    their train cells are in the table (their gap from the rates would be 0.5 - 0.1 = 0.4 on every seed)."""
+    no_gap = rows_of({"train": [0.5] * 5, "camera_pos": [0.1] * 5}, n=20)
+    rows = [{**r, "gap": None} if r["condition"] == "camera_pos" else r for r in no_gap]
+    rows += rows_of({"train": TRAIN, "camera_pos": CAMERA, "light": LIGHT})
+    found, (c,) = decide_one(claim("gap_opens", factors=["camera_pos"]), cfg, rows)
+    gaps = np.subtract(TRAIN, CAMERA)  # N = 5 alone: 0.5, 0.35, 0.5, 0.35, 0.38
+    p_train = np.mean(TRAIN)  # P_T of the cells compared: N = 5's train cells alone
+    check(found.comparisons[0], c, label="camera_pos", threshold=0.0, sign=1, point=gaps.mean(), per_seed=gaps,
+          headroom=p_train, resolvable=lambda e, z: power.mean_resolvable_gap(max(1, round(5 * e)), p_train, z),
+          verdict=AGREES, level=0.95)  # fmt: skip
+
+
+THIN_TABLE = [0.6, 0.55, 0.65, 0.6, 0.6]  # table_pos on door-open: mean 0.6
+PICK_CAMERA, PICK_LIGHT = [0.3, 0.4, 0.35, 0.45, 0.4], [0.7, 0.75, 0.7, 0.8, 0.75]  # means 0.38 and 0.74
+
+
+def test_an_orderings_differences_pair_the_factors_with_rows_each_resolving_its_thinner_side_at_its_holm_level():
+    """Tiers [camera_pos, distractors] > [table_pos] > [light]: distractors has no rows of the claim's method (only
+    another method's, placed first and left out, as is that method's table_pos on pick-place), so its two
+    differences are left out and three remain. camera_pos and light ran on both tasks (10 cells of 5 seeds each),
+    table_pos on door-open alone (5): each difference's smallest resolvable effect is that of its thinner side's
+    cells (5 per side whether table_pos is the first or the second factor), at the Holm level it is decided at."""
+    study = StudyConfig(
+        name="synthetic", tasks=["door-open", "pick-place"], seeds=list(SEEDS),
+        factors=["camera_pos", "table_pos", "light", "distractors"], methods=[MethodConfig("bc", {"type": "bc"})],
+    )  # fmt: skip
+    shift = {"train": TRAIN, "table_pos": CAMERA, "distractors": CAMERA}
+    rows = rows_of(shift, method="bc_shift", task="pick-place") + rows_of(shift, method="bc_shift")
+    rows += rows_of({"train": TRAIN, "camera_pos": CAMERA, "table_pos": THIN_TABLE, "light": LIGHT})
+    rows += rows_of({"train": PICK_TRAIN, "camera_pos": PICK_CAMERA, "light": PICK_LIGHT}, task="pick-place")
+    c = claim("ordering", tiers=[["camera_pos", "distractors"], ["table_pos"], ["light"]])
+    (found,) = decide([c], study, rows)
+    decided = {d.label: d for d in found.comparisons}
+    assert list(decided) == ["camera_pos - table_pos", "camera_pos - light", "table_pos - light"]
+    assert sorted(d.level for d in decided.values()) == pytest.approx([0.95, 1 - 0.05 / 2, 1 - 0.05 / 3])
+    # (cells per side, pooled rate of the cells compared: each cell's mean over its 5 seeds of 100 episodes)
+    expected = {
+        "camera_pos - table_pos": (5, (0.48 + 0.38 + 0.6) / 3),  # min(10, 5)
+        "camera_pos - light": (10, (0.48 + 0.38 + 0.78 + 0.74) / 4),  # min(10, 10)
+        "table_pos - light": (5, (0.6 + 0.78 + 0.74) / 3),  # min(5, 10)
+    }
+    for label, (m, p) in expected.items():
+        d = decided[label]
+        assert d.smallest == pytest.approx(power.difference_resolvable(m * EPISODES, p, z_at(d.level)), abs=1e-12)
+
+
+def test_a_claim_on_shifted_rows_without_their_train_rows_has_no_gap_and_warns_nothing(cfg):
+    """A results file of the shifted suites alone (the train suite's rows filtered out), gaps still in it: no gap
+    can be computed from the rates, so the points and the headroom (from P_T) are NaN, without a warning of a mean
+    of nothing."""
+    rows = [r for r in rows_of({"train": TRAIN, "camera_pos": CAMERA, "light": LIGHT}) if r["condition"] != "train"]
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        found = decide(
+            [claim("gap_opens", factors=["camera_pos"]), claim("gap_exceeds", factors=["camera_pos", "light"])],
+            cfg,
+            rows,
+        )
+    (gap,), (difference,) = (v.comparisons for v in found)
+    assert all(math.isnan(v) for d in (gap, difference) for v in (d.point, d.low, d.high, d.headroom))
+    assert difference.verdict == NOT_RESOLVED
+
+
+def test_a_study_tests_its_own_claims_else_the_papers_ordering_over_its_factors(cfg):
+    own = claim("gap_opens", factors=["light"])
+    with_claims = StudyConfig(
+        name="synthetic", tasks=["door-open"], seeds=list(SEEDS), factors=["camera_pos", "table_pos", "light"],
+        methods=[MethodConfig("bc", {"type": "bc"})], claims=[own],
+    )  # fmt: skip
+    assert claims.study_claims(with_claims) == [own]
+    stated, fig3a = claims.study_claims(cfg)  # factors camera_pos, table_pos, light
+    assert stated.tiers == [["camera_pos", "table_pos"], ["light"]]
+    assert fig3a.tiers == [["camera_pos"], ["table_pos"], ["light"]]
+
+
+@pytest.mark.parametrize(
+    "door_only",
+    [["camera_pos"], ["camera_pos", "camera_pos+light"]],
+    ids=["first factor on one task", "first factor and pair on one task"],
+)
+def test_a_pair_whose_first_factor_ran_on_fewer_tasks_than_another_condition_has_no_comparison(cfg, door_only):
+    """The pair's conditions on both tasks (pick-place's rows first) but ``door_only`` on door-open alone: the first
+    factor's cells (1) differ from the second factor's (2), whether or not the pair's match either, so there is
+    no comparison (its cells do not line up)."""
+    rates = {"train": TRAIN, "camera_pos": CAMERA, "light": LIGHT, "camera_pos+light": CAMERA}
+    rows = rows_of({c: v for c, v in rates.items() if c not in door_only}, task="pick-place") + rows_of(rates)
+    (found,) = decide([claim("pair", pair="camera_pos+light")], cfg, rows)
+    assert (found.comparisons, found.verdict) == ([], NOT_RESOLVED)
