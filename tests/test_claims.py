@@ -11,6 +11,7 @@ import pytest
 from lerobot_factorworld.study.paper import PAPER_FACTOR_RANKS
 from lerobot_factorworld.study.plan.claim_config import ClaimConfig
 from lerobot_factorworld.study.plan.config import MethodConfig, StudyConfig
+from lerobot_factorworld.study.report.claims_markdown import to_resolve
 from lerobot_factorworld.study.report.write import load_config, regenerate_report
 from lerobot_factorworld.study.results.aggregate import method_rho_differences
 from lerobot_factorworld.study.results.claims import AGREES, CAPPED, DISAGREES, NOT_RESOLVED, decide, study_claims
@@ -196,6 +197,22 @@ def test_one_seed_resolves_nothing(cfg):
     found = decide([claim("gap_opens", factors=["camera_pos"])], cfg, rows)[0]
     assert found.verdict == NOT_RESOLVED
     assert found.comparisons[0].bootstrap[0] > 0  # the episodes' own interval excludes 0
+
+
+def test_unknown_episode_counts_leave_an_unresolved_comparison_not_resolved_and_zero_rates_capped(cfg):
+    """Without episode counts the design's power is unknown, which is not the same as P_T = 0 (nothing to
+    resolve): the first stays "not resolved" with the interval the counts do not enter, the second is capped."""
+    gap = claim("gap_opens", factors=["camera_pos"])
+    counted = rows_of({"camera_pos": [0.8, 1.0, 0.85, 0.95, 0.9]})
+    uncounted = [{**r, "episodes": 0, "successes": None} for r in counted]
+    with_counts, without = decide([gap], cfg, counted)[0], decide([gap], cfg, uncounted)[0]
+    assert with_counts.verdict == without.verdict == NOT_RESOLVED
+    (a,), (b,) = with_counts.comparisons, without.comparisons
+    assert (b.low, b.high) == pytest.approx((a.low, a.high)) and b.low < 0 < b.high
+    assert to_resolve(a).startswith("resolves 0.") and to_resolve(b).startswith("episode counts unknown")
+    zero = decide([gap], cfg, rows_of({"camera_pos": 0.0, "train": 0.0}))[0]
+    assert zero.verdict == CAPPED
+    assert to_resolve(zero.comparisons[0]) == "these success rates leave no effect this design resolves"
 
 
 def test_the_t_interval_widens_what_the_bootstrap_would_resolve(cfg):

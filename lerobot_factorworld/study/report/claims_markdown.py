@@ -31,8 +31,11 @@ def to_resolve(d: Decided) -> str:
     if d.verdict in (AGREES, DISAGREES):
         return "resolved"
     if d.verdict == CAPPED:
+        if not math.isfinite(d.smallest):
+            return "these success rates leave no effect this design resolves"
         return f"at most {d.headroom:.3f} the paper's way, below the {d.smallest:.3f} this design resolves"
-    parts = [f"resolves {d.smallest:.3f} (episode noise)" if math.isfinite(d.smallest) else "resolves nothing"]
+    # not resolved: ``smallest`` is NaN only when the episode counts are unknown (claims._verdict)
+    parts = [f"resolves {d.smallest:.3f} (episode noise)" if math.isfinite(d.smallest) else "episode counts unknown"]
     effect = abs(d.point - d.threshold)
     if not math.isfinite(effect) or effect == 0:
         parts.append("no effect observed")

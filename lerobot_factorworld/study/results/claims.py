@@ -357,12 +357,14 @@ def decision_interval(reps: np.ndarray, per_seed: np.ndarray, level: float) -> t
     return min(float(lo), mean - half), max(float(hi), mean + half)
 
 
-def _verdict(c: Comparison, low: float, high: float, smallest: float) -> str:
+def _verdict(c: Comparison, low: float, high: float, smallest: float, counts_known: bool = True) -> str:
+    """``smallest`` is NaN both when the success rates leave nothing to resolve (capped) and when the episode
+    counts are unknown (``counts_known`` false: no power, so an unresolved comparison stays not resolved)."""
     if np.isfinite(low) and np.isfinite(high):
         above, below = low > c.threshold, high < c.threshold
         if above or below:
             return AGREES if (above if c.sign > 0 else below) else DISAGREES
-    if not np.isfinite(smallest):
+    if counts_known and not np.isfinite(smallest):
         return CAPPED  # the success rates leave nothing this design can resolve (e.g. P_T or P_min at 0)
     if np.isfinite(c.headroom) and (c.headroom <= 0 or c.headroom < smallest):
         return CAPPED  # no room the paper's way, or less than the design resolves
@@ -416,7 +418,7 @@ def decide(claims: Sequence[ClaimConfig], cfg: StudyConfig, rows: Sequence[dict]
         z = float(stats.norm.ppf(1 - (1 - level) / 2))
         episodes = _episodes(c.table)
         smallest = c.resolvable(episodes, z) if np.isfinite(episodes) else math.nan  # counts unknown: no power
-        verdict = _verdict(c, low, high, smallest)
+        verdict = _verdict(c, low, high, smallest, counts_known=bool(np.isfinite(episodes)))
         if stopped and verdict in (AGREES, DISAGREES):
             verdict = NOT_RESOLVED  # Holm: nothing after the first comparison left unresolved is resolved
         if verdict not in (AGREES, DISAGREES):
