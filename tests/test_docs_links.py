@@ -4,6 +4,7 @@ headings: the guides send readers to each other's sections, and a renamed headin
 from __future__ import annotations
 
 import re
+from functools import cache
 from pathlib import Path
 
 import pytest
@@ -19,7 +20,8 @@ def github_anchor(heading: str) -> str:
     return re.sub(r"[^\w\- ]", "", heading.strip().lower()).replace(" ", "-")
 
 
-def anchors(page: Path) -> set[str]:
+@cache  # a page is linked many times; read its headings once
+def anchors(page: Path) -> frozenset[str]:
     found: set[str] = set()
     seen: dict[str, int] = {}
     for heading in re.findall(r"^#+ (.*)$", FENCE.sub("", page.read_text()), flags=re.M):
@@ -27,7 +29,7 @@ def anchors(page: Path) -> set[str]:
         count = seen.get(slug, 0)
         seen[slug] = count + 1
         found.add(slug if count == 0 else f"{slug}-{count}")  # GitHub numbers repeated headings
-    return found
+    return frozenset(found)
 
 
 def relative_links(page: Path) -> list[str]:
