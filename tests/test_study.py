@@ -291,6 +291,65 @@ def test_methods_are_set_against_the_first_per_factor_and_group():
     assert "| shift | textures |" not in text  # no texture factor in this study
 
 
+def test_ordering_per_task_sets_each_method_s_spearman_against_the_first():
+    """Two methods on two tasks: the per-task table adds the second method's Spearman with the paper and its
+    difference to the first's, per task. On door-open the second method reverses the first's ordering (+1 to
+    -1: -2); on pick-place both order the factors alike (difference 0)."""
+    from lerobot_factorworld.study.plan.config import StudyConfig
+    from lerobot_factorworld.study.plan.grid import DEFAULT_WIDTHS
+    from lerobot_factorworld.study.report.markdown import _ordering_per_task_section
+
+    def row(method, task, seed, condition, successes):
+        return {
+            "method": method,
+            "task": task,
+            "n_train_envs": 5,
+            "seed": seed,
+            "widths": DEFAULT_WIDTHS,
+            "condition": condition,
+            "n_factors": 1,
+            "success_rate": successes / 20,
+            "episodes": 20,
+            "gap": math.nan if condition == "train" else 1.0 - successes / 20,
+        }
+
+    factors = ["camera_pos", "floor_texture", "light"]  # paper ranks 1.5, 5, 6.5: gaps in this order give +1
+    hardest_first = (10, 14, 18)  # successes of 20: gaps 0.5, 0.3, 0.1
+    ordered = {
+        ("bc", "door-open"): hardest_first,
+        ("bc_none", "door-open"): hardest_first[::-1],
+        ("bc", "pick-place"): hardest_first,
+        ("bc_none", "pick-place"): hardest_first,
+    }
+    rows = []
+    for (method, task), successes in ordered.items():
+        for seed in (0, 1):
+            rows.append(row(method, task, seed, "train", 20))
+            rows += [row(method, task, seed, f, k) for f, k in zip(factors, successes)]
+    cfg = StudyConfig(
+        tasks=["door-open", "pick-place"],
+        factors=factors,
+        methods=[
+            {"name": "bc", "policy": {"type": "bc", "augmentation": "shift"}},
+            {"name": "bc_none", "policy": {"type": "bc", "augmentation": "none"}},
+        ],
+    )
+    lines = _ordering_per_task_section(cfg, rows)
+
+    def cells(label):  # the row's (point, low, high) per task
+        (line,) = [x for x in lines if x.startswith(f"| {label} |")]
+        found = re.findall(r"([+-]\d\.\d\d) \[([+-]\d\.\d\d), ([+-]\d\.\d\d)\]", line)
+        return [tuple(float(v) for v in f) for f in found]
+
+    assert [c[0] for c in cells("Spearman with the paper")] == [1.0, 1.0]
+    assert [c[0] for c in cells("Spearman with the paper, bc_none")] == [-1.0, 1.0]
+    (door, pick) = cells("bc_none minus bc")
+    assert door[0] == -2.0 and door[1] <= door[0] <= door[2] < 0  # resolved on door-open alone
+    assert pick[0] == 0.0 and pick[1] < 0 < pick[2]  # pooled over tasks it would read -1
+    one = replace(cfg, methods=cfg.methods[:1])
+    assert not [x for x in _ordering_per_task_section(one, rows) if "bc_none" in x]
+
+
 def test_test_environments_do_not_depend_on_the_other_conditions():
     alone = evaluation_suites("pick-place", 2, ["light", "table_texture"], ["light"], 4, seed=3)
     crowded = evaluation_suites(

@@ -317,11 +317,17 @@ def _ordering_per_task_section(cfg: StudyConfig, rows: list[dict]) -> list[str]:
         return []
     method = cfg.methods[0].name
     per_task = task_orderings(rows, method, cfg.shifted_factors(), tasks)
+    other_methods = _method_rho_rows_per_task(cfg, rows, tasks)
     lines = [
         f"## Ordering per task ({method})",
         "",
         "Each task's mean gap per factor (over N and seeds) with its 95% bootstrap interval and its rank among the "
-        "factors (1 = hardest); the last row is Spearman's rho with the paper's ranks.",
+        "factors (1 = hardest); the Spearman row is rho with the paper's ranks"
+        + (
+            f"; below it, each other method's rho and that rho minus {method}'s (one bootstrap of both per task)."
+            if other_methods
+            else "."
+        ),
         "",
         "| factor | " + " | ".join(tasks) + " | paper rank |",
         "|---|" + "---|" * (len(tasks) + 1),
@@ -340,7 +346,30 @@ def _ordering_per_task_section(cfg: StudyConfig, rows: list[dict]) -> list[str]:
         rho = spearman(ranks[t], PAPER_FACTOR_RANKS)
         low, high = per_task[t].rho_interval(PAPER_FACTOR_RANKS)
         rhos.append("n/a" if math.isnan(rho) else f"{rho:+.2f} {ci(low, high, digits=2)}")
-    lines += ["| Spearman with the paper | " + " | ".join(rhos) + " | |", ""]
+    lines += ["| Spearman with the paper | " + " | ".join(rhos) + " | |"]
+    return lines + other_methods + [""]
+
+
+def _method_rho_rows_per_task(cfg: StudyConfig, rows: list[dict], tasks: list[str]) -> list[str]:
+    """Per method after the first, two rows of the per-task table: its Spearman with the paper and that rho minus
+    the first method's, each task's interval from one bootstrap of both methods on that task's rows (so whether an
+    augmentation moves the ordering is read per task, not only pooled)."""
+    methods = [m.name for m in cfg.methods]
+    per_task = {
+        t: method_rho_differences(
+            [r for r in rows if r["task"] == t], methods, cfg.shifted_factors(), PAPER_FACTOR_RANKS
+        )
+        for t in tasks
+    }
+    lines = []
+    for other in methods[1:]:
+        found = [per_task[t].get(other) for t in tasks]
+        if not any(found):
+            continue
+        own = [f"{o[0][0]:+.2f} {ci(*o[0][1:], digits=2)}" if o else "n/a" for o in found]
+        diff = [f"{o[1][0]:+.2f} {ci(*o[1][1:], digits=2)}" if o else "n/a" for o in found]
+        lines.append(f"| Spearman with the paper, {other} | " + " | ".join(own) + " | |")
+        lines.append(f"| {other} minus {methods[0]} | " + " | ".join(diff) + " | |")
     return lines
 
 
