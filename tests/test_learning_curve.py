@@ -145,3 +145,133 @@ def test_a_study_with_a_curve_evaluates_each_checkpoint_and_reports_it(tmp_path)
         return text[start : text.index(f"(`{CURVE_FILE}`).*", start)]
 
     assert section(again) == section(report)
+
+
+TWO_METHODS = """
+name: two
+out_dir: {out}
+tasks: [handle-press]
+n_train_envs: [1]
+seeds: [0]
+train_factors: [light]
+factors: [light]
+methods:
+  - name: cnn
+    policy: {{type: bc}}
+  - name: transformer
+    policy: {{type: rt1, preset: small}}
+    train: {{epochs: 2, batch_size: 4, curve_every: 1}}
+collect:
+  demos: 2
+train:
+  epochs: 3
+  batch_size: 8
+eval:
+  n_test_envs: 1
+  episodes: 2
+"""
+
+
+def _two_methods(tmp_path: Path, **edits: str) -> StudyCommand:
+    text = TWO_METHODS.format(out=tmp_path / "out")
+    for old, new in edits.items():
+        text = text.replace(old, new)
+    path = tmp_path / "two.yaml"
+    path.write_text(text)
+    return parse_config(StudyCommand, [f"--config_path={path}"], "study")
+
+
+def test_a_method_s_own_training_settings_key_its_training_alone(tmp_path):
+    """A method's ``train`` overrides the study's for its training only: the other method keeps the key it has
+    in a study of its own, and the overriding method's training is the one a study with those settings as its
+    ``train`` makes (one key: each study reuses the other's step)."""
+    cfg = _two_methods(tmp_path).grid()
+    plan = make_plan(cfg)
+    by_method = {s.meta["method"]: s for s in plan.of_kind("train")}
+    assert (by_method["cnn"].inputs["epochs"], by_method["cnn"].inputs["batch_size"]) == (3, 8)
+    assert "curve_every" not in by_method["cnn"].inputs
+    t = by_method["transformer"].inputs
+    assert (t["epochs"], t["batch_size"], t["curve_every"]) == (2, 4, 1)
+    assert [(s.meta["method"], s.meta[CURVE_EPOCHS]) for s in plan.curve_points()] == [("transformer", 1)]
+    alone = replace(cfg, methods=cfg.methods[:1])
+    assert make_plan(alone).of_kind("train")[0].key == by_method["cnn"].key
+    as_study = _two_methods(  # the same settings as the study's own train (parsed from YAML as floats)
+        tmp_path,
+        **{
+            "  - name: cnn\n    policy: {type: bc}\n": "",
+            "    train: {epochs: 2, batch_size: 4, curve_every: 1}\n": "",
+            "epochs: 3\n  batch_size: 8": "epochs: 2\n  batch_size: 4\n  curve_every: 1",
+        },
+    ).grid()
+    assert [m.name for m in as_study.methods] == ["transformer"] and not as_study.methods[0].train
+    assert make_plan(as_study).of_kind("train")[0].key == by_method["transformer"].key
+    steps_only = replace(cfg.methods[1], train={"steps": 5})
+    assert cfg.train_for(steps_only) == replace(cfg.train, steps=5, epochs=None)  # steps alone clears epochs
+
+
+@pytest.mark.parametrize(
+    "edits, message",
+    [
+        (
+            {"train: {epochs: 2,": "train: {lr: 1, epochs: 2,"},
+            "method 'transformer': unknown train setting.s. lr; valid: steps, epochs, batch_size, curve_every, extra_args",
+        ),
+        ({"curve_every: 1}": "curve_every: 1, steps: 5, epochs: null}"}, "method 'transformer': train.curve_every"),
+        ({"batch_size: 4,": "batch_size: 0,"}, "method 'transformer': train.batch_size must be at least 1, got 0"),
+        ({"epochs: 2,": "epochs: -2,"}, "method 'transformer': train.epochs must be a positive number, got -2"),
+        (
+            {"batch_size: 4,": "batch_size: 4.5,"},
+            "method 'transformer': train.batch_size must be a whole number, got 4.5",
+        ),
+        ({"epochs: 2,": "epochs: two,"}, "method 'transformer': train.epochs must be a number, got 'two'"),
+        ({"curve_every: 1}": "extra_args: --x}"}, "method 'transformer': train.extra_args must be a list of flags"),
+    ],
+)
+def test_a_method_s_bad_training_settings_are_refused_naming_the_method(tmp_path, edits, message):
+    with pytest.raises(ValueError, match=message):
+        _two_methods(tmp_path, **edits)
+
+
+def test_a_given_checkpoint_takes_no_training_settings(tmp_path):
+    from lerobot_factorworld.study.plan.config import MethodConfig
+
+    with pytest.raises(ValueError, match="train settings apply to a trained method, not a given checkpoint"):
+        MethodConfig("given", checkpoint=str(tmp_path), train={"epochs": 2})
+
+
+def test_two_methods_alike_but_for_their_training_settings_are_two_methods(tmp_path):
+    """The same policy at two budgets trains twice (two keys), so it is allowed; the report names each budget."""
+    from lerobot_factorworld.study.report.markdown import _training_text
+
+    cfg = _two_methods(tmp_path, **{"type: bc}": "type: rt1, preset: small}"}).grid()
+    keys = {s.meta["method"]: s.key for s in make_plan(cfg).of_kind("train")}
+    assert len(set(keys.values())) == 2
+    assert _training_text(cfg) == "cnn 3 epochs at batch 8, transformer 2 epochs at batch 4"
+    assert _training_text(replace(cfg, methods=cfg.methods[:1])) == "3 epochs at batch 8"
+    with pytest.raises(ValueError, match="training settings and training data"):
+        replace(cfg, methods=[cfg.methods[0], replace(cfg.methods[1], name="again", train={})])
+
+
+def test_the_curve_s_last_point_is_its_own_training_s_epochs(tmp_path):
+    """curve.csv holds the points of the methods with a curve only, the last at that method's own epochs (2),
+    not the study's (3), with the step its training ended at."""
+    import json
+
+    from lerobot_factorworld.study.results.curve import curve_rows
+
+    cfg = _two_methods(tmp_path).grid()
+    plan = make_plan(cfg)
+    study = tmp_path / "out"
+    for step in plan.of_kind("train"):
+        folder = step.folder(study)
+        folder.mkdir(parents=True)
+        (folder / "result.json").write_text(json.dumps({"steps": 6, "curve": {"1": 3}}))
+    for step in plan.of_kind("eval"):
+        folder = step.folder(study)
+        folder.mkdir(parents=True)
+        (folder / "result.json").write_text(json.dumps({"successes": [True, False]}))
+    rows = curve_rows(cfg, plan, study)
+    assert [(r["method"], r["epochs"], r["steps"], r["successes"]) for r in rows] == [
+        ("transformer", 1, 3, 1),
+        ("transformer", 2, 6, 1),
+    ]

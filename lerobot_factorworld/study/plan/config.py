@@ -15,7 +15,7 @@ import math
 import os
 import re
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -112,6 +112,25 @@ def check_device(setting: str, device: str) -> None:
         raise ValueError(f"unknown {setting} {device!r}; valid: cpu, cuda, cuda:<index>, mps")
 
 
+METHOD_TRAIN_SETTINGS = ("steps", "epochs", "batch_size", "curve_every", "extra_args")  # a method may set its own
+
+
+def _train_value(method: str, name: str, value: Any) -> Any:
+    """A method's own ``train`` value as the study's ``train`` parses it (``20`` -> ``20.0`` epochs), so the
+    same settings key the same training whichever of the two holds them."""
+    if name == "extra_args":  # lerobot-train runs in the step's folder, as for the study's extra_args
+        if not isinstance(value, list) or not all(isinstance(a, str) for a in value):
+            raise ValueError(f"method {method!r}: train.extra_args must be a list of flags, got {value!r}")
+        return resolve_arg_paths(value)
+    if value is None and name == "epochs":
+        return None
+    whole = name in ("steps", "batch_size")
+    if isinstance(value, bool) or not isinstance(value, int | float) or (whole and value != int(value)):
+        kind = "a whole number" if whole else "a number"
+        raise ValueError(f"method {method!r}: train.{name} must be {kind}, got {value!r}")
+    return int(value) if whole else float(value)
+
+
 @dataclass
 class MethodConfig:
     """A method: a LeRobot policy type and its overrides, trained on every dataset of the study, e.g.
@@ -137,6 +156,11 @@ class MethodConfig:
             changes. Meta-World tasks only (the datasets must share their features).
         extra_demos: Demos of each extra task (``None``: ``collect.demos`` for it, so the datasets are the ones
             those tasks' own cells use, collected once).
+        train: This method's own training settings over the study's ``train``, among
+            :data:`METHOD_TRAIN_SETTINGS`: e.g. ``{epochs: 20, batch_size: 16}`` for a transformer beside a CNN
+            trained 60 epochs at batch 32, in one study on the same datasets. Its training's key holds the
+            settings in effect, so a method that overrides nothing keeps its keys. ``steps`` without ``epochs``
+            trains that many steps even where the study's ``train`` counts epochs.
         epochs_over: With ``extra_tasks``, what ``train.epochs`` counts: ``task`` (the default) the task's own
             frames, so the gradient steps are those without extra tasks and each own frame is seen fewer times;
             ``merged`` every frame of the merged data, so each own frame is seen as often as without extra tasks,
@@ -151,9 +175,19 @@ class MethodConfig:
     extra_tasks: list[str] = field(default_factory=list)
     extra_demos: int | None = None
     epochs_over: str = OWN_FRAMES
+    train: dict[str, Any] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         check_obs_mode(self.obs)
+        unknown = sorted(set(self.train) - set(METHOD_TRAIN_SETTINGS))
+        if unknown:
+            raise ValueError(
+                f"method {self.name!r}: unknown train setting(s) {', '.join(unknown)}; valid: "
+                + ", ".join(METHOD_TRAIN_SETTINGS)
+            )
+        if self.checkpoint is not None and self.train:
+            raise ValueError(f"method {self.name!r}: train settings apply to a trained method, not a given checkpoint")
+        self.train = {k: _train_value(self.name, k, v) for k, v in self.train.items()}
         if self.epochs_over not in EPOCHS_OVER:
             raise ValueError(
                 f"method {self.name!r}: unknown epochs_over {self.epochs_over!r}; valid: {', '.join(EPOCHS_OVER)}"
@@ -364,6 +398,17 @@ class TrainSettings:
         self.extra_args = resolve_arg_paths(list(self.extra_args))
 
 
+def _check_train(train: TrainSettings, where: str) -> None:
+    """A training's settings are usable (``where``: ``train``, or the method whose own settings these are)."""
+    if train.curve_every < 0 or (train.curve_every and train.epochs is None):
+        raise ValueError(f"{where}.curve_every is a number of epochs (0: no learning curve) and needs {where}.epochs")
+    if train.epochs is None:
+        check_at_least(f"{where}.steps", train.steps, 1)
+    elif isinstance(train.epochs, bool) or not isinstance(train.epochs, int | float) or train.epochs <= 0:
+        raise ValueError(f"{where}.epochs must be a positive number, got {train.epochs!r}")
+    check_at_least(f"{where}.batch_size", train.batch_size, 1)
+
+
 @dataclass
 class EvalSettings:
     """Evaluation of every checkpoint on every condition (LeRobot's ``eval_policy_all``).
@@ -474,6 +519,18 @@ class StudyConfig:
         """The methods that name an existing checkpoint: evaluated only."""
         return [m for m in self.methods if not m.trains]
 
+    def train_for(self, method: MethodConfig) -> TrainSettings:
+        """The training settings ``method`` trains with: the study's ``train`` with the method's own ``train``
+        over them (``steps`` alone clears the study's ``epochs``)."""
+        own = dict(method.train)
+        if "steps" in own and "epochs" not in own:
+            own["epochs"] = None
+        return replace(self.train, **own) if own else self.train
+
+    def curve_methods(self) -> list[MethodConfig]:
+        """The trained methods with a learning curve (their ``train.curve_every``)."""
+        return [m for m in self.trained_methods() if self.train_for(m).curve_every]
+
     def family_conditions(self) -> list[str]:
         """The task families' own conditions listed in ``factors`` (e.g. held-out phrasings / objects)."""
         return [f for f in self.factors if condition_family(f) is not None]
@@ -529,10 +586,10 @@ class StudyConfig:
         if len(set(self.seeds)) != len(self.seeds):
             raise ValueError(f"seeds must be distinct, got {self.seeds}")
         self._validate_episodes()
-        if self.train.curve_every < 0 or (self.train.curve_every and self.train.epochs is None):
-            raise ValueError("train.curve_every is a number of epochs (0: no learning curve) and needs train.epochs")
-        if self.train.epochs is None and self.train.steps < 1:
-            raise ValueError("train.steps must be at least 1 (or set train.epochs)")
+        _check_train(self.train, "train")
+        for method in self.trained_methods():
+            if method.train:
+                _check_train(self.train_for(method), f"method {method.name!r}: train")
         for method in self.trained_methods():  # last: importing LeRobot's policy configs takes seconds
             check_policy(method)
 
@@ -574,7 +631,7 @@ class StudyConfig:
         for method in self.trained_methods():
             for task in self.tasks if method.extra_tasks else ():
                 check_extra_task(method.name, task, "with extra_tasks, task")
-            if method.epochs_over != OWN_FRAMES and self.train.epochs is None:
+            if method.epochs_over != OWN_FRAMES and self.train_for(method).epochs is None:
                 raise ValueError(
                     f"method {method.name!r}: epochs_over={method.epochs_over} says what train.epochs counts; "
                     "set train.epochs instead of train.steps"
@@ -583,11 +640,12 @@ class StudyConfig:
         for method in self.trained_methods():
             data = {"extra_tasks": sorted(method.extra_tasks), "extra_demos": method.extra_demos}
             data["epochs_over"] = method.epochs_over
+            data["train"] = vars(self.train_for(method))
             settings = json.dumps({"policy": method.policy, **data}, sort_keys=True)
             if settings in seen:
                 raise ValueError(
-                    f"methods {seen[settings]!r} and {method.name!r} have the same policy settings {method.policy} "
-                    "and training data: "
+                    f"methods {seen[settings]!r} and {method.name!r} have the same policy settings {method.policy}, "
+                    "training settings and training data: "
                     "they would train one checkpoint; drop one or change its settings"
                 )
             seen[settings] = method.name
@@ -625,10 +683,17 @@ class StudyConfig:
             for name, path in policy_paths(method.policy).items():
                 if name.endswith(WEIGHTS_SUFFIX) and not Path(path).is_file():
                     missing.append(f"method {method.name!r}: {name} {path}")
-        for arg in self.train.extra_args:
-            flag = split_flag(arg)
-            if flag and flag[0].endswith(WEIGHTS_SUFFIX) and not os.path.isfile(flag[1]):
-                missing.append(f"train.extra_args: {flag[0]} {flag[1]}")
+        owners = [("train.extra_args", self.train.extra_args)]
+        owners += [
+            (f"method {m.name!r}: train.extra_args", m.train["extra_args"])
+            for m in self.methods
+            if "extra_args" in m.train
+        ]
+        for owner, args in owners:
+            for arg in args:
+                flag = split_flag(arg)
+                if flag and flag[0].endswith(WEIGHTS_SUFFIX) and not os.path.isfile(flag[1]):
+                    missing.append(f"{owner}: {flag[0]} {flag[1]}")
         return missing
 
     def check_weight_files(self) -> None:

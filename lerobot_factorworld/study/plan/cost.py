@@ -276,8 +276,9 @@ def describe(cfg: StudyConfig, plan: Plan, options: RunOptions) -> str:
         + (f" + {len(cfg.family_conditions())} language" if cfg.family_conditions() else "")
         + f"; radius runs: {len(cfg.radius_variants())}"
         + (
-            f"; learning curve: a checkpoint every {cfg.train.curve_every:g} epochs, {len(plan.curve_points())} "
-            "more evaluations on train"
+            "; learning curve: a checkpoint every "
+            + ", ".join(f"{cfg.train_for(m).curve_every:g} epochs ({m.name})" for m in cfg.curve_methods())
+            + f", {len(plan.curve_points())} more evaluations on train"
             if plan.curve_points()
             else ""
         )

@@ -18,7 +18,7 @@ from ..run.checkpoint import GIVEN_CHECKPOINT, keyed_checkpoint
 from ..run.inputs import OWN_FRAMES, CollectInputs, EnvInputs, EvalInputs, TrainInputs
 from ..run.recording import RECORD_SETTING
 from ..run.steps import RUN, Step, versions
-from .config import RADII_M, MethodConfig, StudyConfig, map_arg_paths, map_policy_paths
+from .config import RADII_M, MethodConfig, StudyConfig, TrainSettings, map_arg_paths, map_policy_paths
 
 DEFAULT_WIDTHS = "default"
 CURVE_EPOCHS = "epochs"  # the label (``Step.meta``) of a learning curve's evaluation: its checkpoint's epochs
@@ -99,8 +99,9 @@ def _method_steps(
             _extra_collect_step(cfg, method, extra, collect) for extra in method.extra_tasks_for(collect.meta["task"])
         ]
         epochs_over = method.epochs_over if extras and method.epochs_over != OWN_FRAMES else None
-        train = _train_step(cfg, method.policy, seed, collect, labels, extras, epochs_over)
-        curve = [_curve_step(cfg, epochs, train, collect, labels) for epochs in cfg.train.curve_epochs()]
+        settings = cfg.train_for(method)
+        train = _train_step(settings, method.policy, seed, collect, labels, extras, epochs_over)
+        curve = [_curve_step(cfg, epochs, train, collect, labels) for epochs in settings.curve_epochs()]
         return [*extras, train, *(_eval_step(cfg, c, train, collect, labels) for c in conditions), *curve]
     if seed != cfg.seeds[0]:
         return []
@@ -145,7 +146,7 @@ def _extra_collect_step(cfg: StudyConfig, method: MethodConfig, task: str, colle
 
 
 def _train_step(
-    cfg: StudyConfig,
+    t: TrainSettings,
     policy: dict[str, Any],
     seed: int,
     collect: Step,
@@ -155,8 +156,7 @@ def _train_step(
 ) -> Step:
     """Training of one method on one dataset (with ``extras``: merged with other tasks' datasets; the task's
     own comes first in ``deps``, and ``epochs_over`` says what an epoch counts); weight files enter the key by
-    content, not by location."""
-    t = cfg.train
+    content, not by location. ``t``: the method's settings (``StudyConfig.train_for``)."""
     inputs = TrainInputs(
         policy=keyed_policy(policy),
         seed=seed,

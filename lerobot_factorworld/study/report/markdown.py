@@ -22,7 +22,7 @@ from ..paper import (
     PAPER_PAIR_TOLERANCE,
     PAPER_PAIRS_WITHIN,
 )
-from ..plan.config import StudyConfig
+from ..plan.config import MethodConfig, StudyConfig
 from ..results.aggregate import (
     ALL_FACTORS,
     RADIUS_STEP_M,
@@ -99,7 +99,7 @@ def render(
     (:func:`decide_claims`; computed here when not given)."""
     details = family_sections(FAMILY_DETAILS)
     ev = cfg.eval
-    training = f"{cfg.train.epochs:g} epochs" if cfg.train.epochs else f"{cfg.train.steps} steps"
+    training = _training_text(cfg)
     done = len({r["step"] for r in rows})
     lines = [
         f"# Study `{cfg.name}`",
@@ -119,7 +119,7 @@ def render(
         )
         + f"; textures a flat RGB colour with probability {cfg.collect.effective_rgb_fraction:g}, else an image"
         + (f"; rendered at quality {cfg.collect.quality}" if _renders_at_another_quality(cfg) else "")
-        + (f"; training {training} at batch {cfg.train.batch_size}." if cfg.trained_methods() else "."),
+        + (f"; training {training}." if cfg.trained_methods() else "."),
         *_given_lines(cfg, rows),
         *_extra_data_lines(cfg),
         f"- Evaluation: {ev.episodes} episodes per condition and checkpoint (episode i reset with seed "
@@ -228,6 +228,19 @@ def _given_lines(cfg: StudyConfig, rows: list[dict]) -> list[str]:
         f"and they are evaluated at the first seed only, {cfg.seeds[0]} (it samples the environments; a given "
         "checkpoint has no training seed)."
     ]
+
+
+def _training_text(cfg: StudyConfig) -> str:
+    """``60 epochs at batch 32``; per method where methods train differently (their own ``train``)."""
+
+    def text(method: MethodConfig) -> str:
+        t = cfg.train_for(method)
+        return (f"{t.epochs:g} epochs" if t.epochs else f"{t.steps} steps") + f" at batch {t.batch_size}"
+
+    texts = {m.name: text(m) for m in cfg.trained_methods()}
+    if len(set(texts.values())) <= 1:
+        return next(iter(texts.values()), "")
+    return ", ".join(f"{name} {value}" for name, value in texts.items())
 
 
 def _ordering_section(cfg: StudyConfig, rows: list[dict], verdicts: list[ClaimVerdict]) -> list[str]:

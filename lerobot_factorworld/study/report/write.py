@@ -80,7 +80,7 @@ def render_report(
     verdicts = decide_claims(cfg, rows)  # once, for both reports
     families = families_of(cfg)
     (out_dir / CURVE_PLOT).unlink(missing_ok=True)
-    curve = read_curve(out_dir / CURVE_FILE) if cfg.train.curve_every and (out_dir / CURVE_FILE).is_file() else []
+    curve = read_curve(out_dir / CURVE_FILE) if cfg.curve_methods() and (out_dir / CURVE_FILE).is_file() else []
     curve_lines = curve_section(curve, plot_curve(curve, out_dir / CURVE_PLOT)) if curve else []
 
     def family_sections(part: str) -> list[str]:
@@ -132,7 +132,7 @@ def regenerate_report(
         shutil.copytree(videos, out / VIDEOS_DIR, dirs_exist_ok=True)
     if not (out / RUN_CONFIG_FILE).is_file() or config.resolve() != (out / RUN_CONFIG_FILE).resolve():
         _publish_config(config, out / PUBLISHED_CONFIG)
-    for name in [CURVE_FILE] if cfg.train.curve_every else []:
+    for name in [CURVE_FILE] if cfg.curve_methods() else []:
         if (results.parent / name).is_file():
             _copy(results.parent / name, out / name)
     for family in families_of(cfg):

@@ -47,8 +47,12 @@ def curve_rows(cfg: StudyConfig, plan: Plan, study_dir: str | Path) -> list[dict
     if not plan.curve_points():
         return []
     points = [(s, s.meta[CURVE_EPOCHS]) for s in plan.curve_points()]
-    last = whole_epochs(cfg.train.epochs)
-    points += [(s, last) for s in plan.evaluations() if s.meta["condition"] == TRAIN_SUITE and s.deps]
+    trained = {s.key: s.inputs for s in plan.of_kind("train") if s.inputs.get("curve_every")}  # the curves' trainings
+    points += [
+        (s, whole_epochs(trained[s.deps[0]]["epochs"]))  # the last checkpoint: the training's own epochs
+        for s in plan.evaluations()
+        if s.meta["condition"] == TRAIN_SUITE and s.deps and s.deps[0] in trained
+    ]
     rows, trainings = [], {}  # each training's result read once for all its checkpoints
     for step, epochs in points:
         if not is_done(step, study_dir):
