@@ -94,6 +94,32 @@ def test_every_committed_report_and_fenced_docs_table_is_what_its_results_csv_re
     assert not problems, "stale docs tables (run `factorworld sync-docs`): " + "; ".join(problems)
 
 
+def test_every_committed_row_is_a_step_today_s_code_plans_from_its_config_and_its_named_study():
+    """The keys of every committed study hold: each ``results.csv`` row's step key is planned by today's code from
+    the config published beside it, and from the shipped study of the same name (``configs/study/``, which may
+    have grown, e.g. F9's RT-1 arm), so a rerun by name finds those steps cached and a changed key fails here."""
+    from lerobot_factorworld.core.settings import parse_config
+    from lerobot_factorworld.study.plan.command import StudyCommand
+    from lerobot_factorworld.study.plan.grid import make_plan
+    from lerobot_factorworld.study.plan.named import resolve_study_config, study_names
+    from lerobot_factorworld.study.report.write import PUBLISHED_CONFIG, load_config
+
+    shipped = {}
+    for name in study_names():
+        cfg = parse_config(StudyCommand, [f"--config_path={resolve_study_config(name)}"], "study").grid()
+        shipped.setdefault(cfg.name, []).append(cfg)
+    named = 0
+    for study, folder in committed_studies(ROOT / RESULTS_ROOT).items():
+        rows = read_results(folder / "results.csv")
+        (name,) = {r["study"] for r in rows}
+        for cfg in [load_config(folder / PUBLISHED_CONFIG), *shipped.get(name, [])]:
+            keys = {s.key for s in make_plan(cfg).evaluations()}
+            unplanned = [r["step"] for r in rows if r["step"] not in keys]
+            assert not unplanned, f"{study}: {len(unplanned)} committed step(s) not in the plan of {cfg.name}"
+        named += bool(shipped.get(name))
+    assert named >= 20  # most committed studies have a shipped config of their name
+
+
 def test_every_findings_row_names_its_configs_and_committed_results():
     """docs/findings.md's summary table has one row per finding F1-F9; each names configs that exist under
     configs/study/findings/ and at least one committed ``docs/results/<study>/results.csv``."""

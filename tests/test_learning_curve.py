@@ -206,7 +206,9 @@ def test_a_method_s_own_training_settings_key_its_training_alone(tmp_path):
     assert [m.name for m in as_study.methods] == ["transformer"] and not as_study.methods[0].train
     assert make_plan(as_study).of_kind("train")[0].key == by_method["transformer"].key
     steps_only = replace(cfg.methods[1], train={"steps": 5})
-    assert cfg.train_for(steps_only) == replace(cfg.train, steps=5, epochs=None)  # steps alone clears epochs
+    assert cfg.train_for(steps_only) == replace(cfg.train, steps=5, epochs=None)  # steps clear epochs
+    curved = replace(cfg, train=replace(cfg.train, curve_every=1))
+    assert curved.train_for(steps_only) == replace(cfg.train, steps=5, epochs=None)  # and the study's curve
 
 
 @pytest.mark.parametrize(
@@ -216,7 +218,7 @@ def test_a_method_s_own_training_settings_key_its_training_alone(tmp_path):
             {"train: {epochs: 2,": "train: {lr: 1, epochs: 2,"},
             "method 'transformer': unknown train setting.s. lr; valid: steps, epochs, batch_size, curve_every, extra_args",
         ),
-        ({"curve_every: 1}": "curve_every: 1, steps: 5, epochs: null}"}, "method 'transformer': train.curve_every"),
+        ({"{epochs: 2,": "{steps: 5,"}, "method 'transformer': train.curve_every is a number of epochs below"),
         ({"batch_size: 4,": "batch_size: 0,"}, "method 'transformer': train.batch_size must be at least 1, got 0"),
         ({"epochs: 2,": "epochs: -2,"}, "method 'transformer': train.epochs must be a positive number, got -2"),
         (
@@ -225,6 +227,10 @@ def test_a_method_s_own_training_settings_key_its_training_alone(tmp_path):
         ),
         ({"epochs: 2,": "epochs: two,"}, "method 'transformer': train.epochs must be a number, got 'two'"),
         ({"curve_every: 1}": "extra_args: --x}"}, "method 'transformer': train.extra_args must be a list of flags"),
+        ({"epochs: 2,": "epochs: 2, steps: 5,"}, "method 'transformer': train sets steps or epochs, not both"),
+        ({"curve_every: 1}": "curve_every: 2}"}, "method 'transformer': train.curve_every is a number of epochs below"),
+        ({"epochs: 2,": "epochs: .nan,"}, "method 'transformer': train.epochs must be a positive number, got nan"),
+        ({"curve_every: 1}": "curve_every: .inf}"}, "method 'transformer': train.curve_every is a number of epochs"),
     ],
 )
 def test_a_method_s_bad_training_settings_are_refused_naming_the_method(tmp_path, edits, message):
@@ -250,6 +256,12 @@ def test_two_methods_alike_but_for_their_training_settings_are_two_methods(tmp_p
     assert _training_text(replace(cfg, methods=cfg.methods[:1])) == "3 epochs at batch 8"
     with pytest.raises(ValueError, match="training settings and training data"):
         replace(cfg, methods=[cfg.methods[0], replace(cfg.methods[1], name="again", train={})])
+    # settings that differ but train the same: a curve every 0 epochs is none; steps are unused under epochs
+    cnn, same = cfg.methods[0], {"curve_every": 0}
+    with pytest.raises(ValueError, match="training settings and training data"):
+        replace(cfg, methods=[cnn, replace(cnn, name="again", train=same)])
+    with pytest.raises(ValueError, match="training settings and training data"):
+        replace(cfg, train=replace(cfg.train, steps=99), methods=[cnn, replace(cnn, name="again", train={"epochs": 3})])
 
 
 def test_the_curve_s_last_point_is_its_own_training_s_epochs(tmp_path):

@@ -294,7 +294,8 @@ def test_methods_are_set_against_the_first_per_factor_and_group():
 def test_ordering_per_task_sets_each_method_s_spearman_against_the_first():
     """Two methods on two tasks: the per-task table adds the second method's Spearman with the paper and its
     difference to the first's, per task. On door-open the second method reverses the first's ordering (+1 to
-    -1: -2); on pick-place both order the factors alike (difference 0)."""
+    -1: -2); on pick-place both order the factors alike (difference 0). A third method is n/a where it has no
+    rows or ties every gap."""
     from lerobot_factorworld.study.plan.config import StudyConfig
     from lerobot_factorworld.study.plan.grid import DEFAULT_WIDTHS
     from lerobot_factorworld.study.report.markdown import _ordering_per_task_section
@@ -320,6 +321,7 @@ def test_ordering_per_task_sets_each_method_s_spearman_against_the_first():
         ("bc_none", "door-open"): hardest_first[::-1],
         ("bc", "pick-place"): hardest_first,
         ("bc_none", "pick-place"): hardest_first,
+        ("bc_tied", "door-open"): (14, 14, 14),  # every gap equal: rho undefined; no pick-place rows
     }
     rows = []
     for (method, task), successes in ordered.items():
@@ -332,6 +334,7 @@ def test_ordering_per_task_sets_each_method_s_spearman_against_the_first():
         methods=[
             {"name": "bc", "policy": {"type": "bc", "augmentation": "shift"}},
             {"name": "bc_none", "policy": {"type": "bc", "augmentation": "none"}},
+            {"name": "bc_tied", "policy": {"type": "bc", "augmentation": "color"}},
         ],
     )
     lines = _ordering_per_task_section(cfg, rows)
@@ -346,6 +349,9 @@ def test_ordering_per_task_sets_each_method_s_spearman_against_the_first():
     (door, pick) = cells("bc_none minus bc")
     assert door[0] == -2.0 and door[1] <= door[0] <= door[2] < 0  # resolved on door-open alone
     assert pick[0] == 0.0 and pick[1] < 0 < pick[2]  # pooled over tasks it would read -1
+    # a method without rows on a task, or with every gap tied, is n/a there, and leaves the others' cells alone
+    assert "| Spearman with the paper, bc_tied | n/a | n/a | |" in lines
+    assert "| bc_tied minus bc | n/a | n/a | |" in lines
     one = replace(cfg, methods=cfg.methods[:1])
     assert not [x for x in _ordering_per_task_section(one, rows) if "bc_none" in x]
 

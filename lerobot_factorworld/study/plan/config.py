@@ -159,8 +159,8 @@ class MethodConfig:
         train: This method's own training settings over the study's ``train``, among
             :data:`METHOD_TRAIN_SETTINGS`: e.g. ``{epochs: 20, batch_size: 16}`` for a transformer beside a CNN
             trained 60 epochs at batch 32, in one study on the same datasets. Its training's key holds the
-            settings in effect, so a method that overrides nothing keeps its keys. ``steps`` without ``epochs``
-            trains that many steps even where the study's ``train`` counts epochs.
+            settings in effect, so a method that overrides nothing keeps its keys. ``steps`` (or ``epochs``, not
+            both) trains that many steps even where the study's ``train`` counts epochs (and draws no curve).
         epochs_over: With ``extra_tasks``, what ``train.epochs`` counts: ``task`` (the default) the task's own
             frames, so the gradient steps are those without extra tasks and each own frame is seen fewer times;
             ``merged`` every frame of the merged data, so each own frame is seen as often as without extra tasks,
@@ -188,6 +188,8 @@ class MethodConfig:
         if self.checkpoint is not None and self.train:
             raise ValueError(f"method {self.name!r}: train settings apply to a trained method, not a given checkpoint")
         self.train = {k: _train_value(self.name, k, v) for k, v in self.train.items()}
+        if "steps" in self.train and "epochs" in self.train:
+            raise ValueError(f"method {self.name!r}: train sets steps or epochs, not both")
         if self.epochs_over not in EPOCHS_OVER:
             raise ValueError(
                 f"method {self.name!r}: unknown epochs_over {self.epochs_over!r}; valid: {', '.join(EPOCHS_OVER)}"
@@ -397,16 +399,38 @@ class TrainSettings:
     def __post_init__(self) -> None:
         self.extra_args = resolve_arg_paths(list(self.extra_args))
 
+    def keyed(self) -> dict[str, Any]:
+        """What of these settings a training's key holds (``grid._train_step``): ``steps`` only without
+        ``epochs``, no ``curve_every`` when 0; two methods whose policy, data and this are equal are one training."""
+        return {
+            "steps": self.steps if self.epochs is None else None,
+            "epochs": self.epochs,
+            "batch_size": self.batch_size,
+            "threads": self.threads,
+            "device": self.device,
+            "extra_args": list(self.extra_args),
+            "curve_every": self.curve_every or None,
+        }
+
 
 def _check_train(train: TrainSettings, where: str) -> None:
     """A training's settings are usable (``where``: ``train``, or the method whose own settings these are)."""
-    if train.curve_every < 0 or (train.curve_every and train.epochs is None):
-        raise ValueError(f"{where}.curve_every is a number of epochs (0: no learning curve) and needs {where}.epochs")
     if train.epochs is None:
         check_at_least(f"{where}.steps", train.steps, 1)
-    elif isinstance(train.epochs, bool) or not isinstance(train.epochs, int | float) or train.epochs <= 0:
+    elif not _positive_number(train.epochs):
         raise ValueError(f"{where}.epochs must be a positive number, got {train.epochs!r}")
+    if train.curve_every and not (
+        _positive_number(train.curve_every) and train.epochs is not None and train.curve_every < train.epochs
+    ):
+        raise ValueError(
+            f"{where}.curve_every is a number of epochs below {where}.epochs (0: no learning curve), got "
+            f"{train.curve_every!r} with epochs {train.epochs!r}"
+        )
     check_at_least(f"{where}.batch_size", train.batch_size, 1)
+
+
+def _positive_number(value: Any) -> bool:
+    return not isinstance(value, bool) and isinstance(value, int | float) and math.isfinite(value) and value > 0
 
 
 @dataclass
@@ -521,10 +545,10 @@ class StudyConfig:
 
     def train_for(self, method: MethodConfig) -> TrainSettings:
         """The training settings ``method`` trains with: the study's ``train`` with the method's own ``train``
-        over them (``steps`` alone clears the study's ``epochs``)."""
+        over them (``steps`` clears the study's ``epochs`` and ``curve_every``)."""
         own = dict(method.train)
-        if "steps" in own and "epochs" not in own:
-            own["epochs"] = None
+        if "steps" in own:  # a number of steps: no epochs, so no curve unless the method asks for one
+            own = {"epochs": None, "curve_every": 0, **own}
         return replace(self.train, **own) if own else self.train
 
     def curve_methods(self) -> list[MethodConfig]:
@@ -640,7 +664,7 @@ class StudyConfig:
         for method in self.trained_methods():
             data = {"extra_tasks": sorted(method.extra_tasks), "extra_demos": method.extra_demos}
             data["epochs_over"] = method.epochs_over
-            data["train"] = vars(self.train_for(method))
+            data["train"] = self.train_for(method).keyed()
             settings = json.dumps({"policy": method.policy, **data}, sort_keys=True)
             if settings in seen:
                 raise ValueError(

@@ -157,18 +157,19 @@ def _train_step(
     """Training of one method on one dataset (with ``extras``: merged with other tasks' datasets; the task's
     own comes first in ``deps``, and ``epochs_over`` says what an epoch counts); weight files enter the key by
     content, not by location. ``t``: the method's settings (``StudyConfig.train_for``)."""
+    keyed = t.keyed()  # the settings' part of the key, as the config's check for duplicate methods reads it
     inputs = TrainInputs(
         policy=keyed_policy(policy),
         seed=seed,
-        steps=t.steps if t.epochs is None else None,
-        epochs=t.epochs,
-        batch_size=t.batch_size,
-        threads=t.threads,
-        device=t.device,
-        extra_args=tuple(keyed_args(t.extra_args)),
+        steps=keyed["steps"],
+        epochs=keyed["epochs"],
+        batch_size=keyed["batch_size"],
+        threads=keyed["threads"],
+        device=keyed["device"],
+        extra_args=tuple(keyed_args(keyed["extra_args"])),
         versions=versions(),
         epochs_over=epochs_over,
-        curve_every=t.curve_every or None,  # no curve: left out of the key, as always
+        curve_every=keyed["curve_every"],  # no curve: left out of the key, as always
     )
     run = {"policy": policy, "extra_args": list(t.extra_args)}
     return Step("train", inputs.to_dict(), (collect.key, *(e.key for e in extras)), {**labels, RUN: run})

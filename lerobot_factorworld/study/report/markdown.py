@@ -365,25 +365,30 @@ def _ordering_per_task_section(cfg: StudyConfig, rows: list[dict]) -> list[str]:
 
 def _method_rho_rows_per_task(cfg: StudyConfig, rows: list[dict], tasks: list[str]) -> list[str]:
     """Per method after the first, two rows of the per-task table: its Spearman with the paper and that rho minus
-    the first method's, each task's interval from one bootstrap of both methods on that task's rows (so whether an
-    augmentation moves the ordering is read per task, not only pooled)."""
-    methods = [m.name for m in cfg.methods]
-    per_task = {
-        t: method_rho_differences(
-            [r for r in rows if r["task"] == t], methods, cfg.shifted_factors(), PAPER_FACTOR_RANKS
-        )
-        for t in tasks
-    }
+    the first method's, each task's interval from one bootstrap of the two methods on that task's rows, over the
+    factors both have there (so whether an augmentation moves the ordering is read per task, not only pooled)."""
+    first, *others = [m.name for m in cfg.methods]
     lines = []
-    for other in methods[1:]:
-        found = [per_task[t].get(other) for t in tasks]
+    for other in others:
+        found = [
+            method_rho_differences(
+                [r for r in rows if r["task"] == t], [first, other], cfg.shifted_factors(), PAPER_FACTOR_RANKS
+            ).get(other)
+            for t in tasks
+        ]
         if not any(found):
             continue
-        own = [f"{o[0][0]:+.2f} {ci(*o[0][1:], digits=2)}" if o else "n/a" for o in found]
-        diff = [f"{o[1][0]:+.2f} {ci(*o[1][1:], digits=2)}" if o else "n/a" for o in found]
+        own = [_rho_cell(f[0] if f else None) for f in found]
         lines.append(f"| Spearman with the paper, {other} | " + " | ".join(own) + " | |")
-        lines.append(f"| {other} minus {methods[0]} | " + " | ".join(diff) + " | |")
+        lines.append(f"| {other} minus {first} | " + " | ".join(_rho_cell(f[1] if f else None) for f in found) + " | |")
     return lines
+
+
+def _rho_cell(interval: tuple[float, float, float] | None) -> str:
+    """``+0.55 [+0.31, +0.68]``; ``n/a`` without rows, or where rho is undefined (every gap tied)."""
+    if interval is None or math.isnan(interval[0]):
+        return "n/a"
+    return f"{interval[0]:+.2f} {ci(*interval[1:], digits=2)}"
 
 
 def _resolved_factors(bootstrap: FactorGapBootstrap, method: str, hardest_first: list[str]) -> list[str]:
