@@ -288,3 +288,25 @@ def test_the_spearman_difference_between_two_methods():
     assert own[0] == pytest.approx(-1.0)
     assert diff[0] == pytest.approx(-2.0)
     assert diff[2] < 0  # the whole interval: bc_none's ordering is resolvably further from the paper's
+
+
+def test_one_claim_for_two_methods_lists_each_method_s_comparisons(cfg):
+    """The same ordering claimed for two methods: the comparisons table has each method's rows, the second's named
+    with its method (the same labels must not hide one method's comparisons behind the other's)."""
+    from lerobot_factorworld.study.report.claims_markdown import comparison_rows
+
+    tiers = {"tiers": [["camera_pos"], ["table_texture"], ["light"]]}
+    claims = [claim("ordering", **tiers), claim("ordering", method="bc_shift", **tiers)]
+    rows = rows_of({"camera_pos": 0.2, "table_texture": 0.5, "light": 0.8})
+    rows += rows_of({"camera_pos": 0.8, "table_texture": 0.5, "light": 0.2}, method="bc_shift")
+    found = {row[0]: row[4] for row in comparison_rows(decide(claims, cfg, rows))}
+    assert found == {
+        "camera_pos - table_texture": AGREES,
+        "camera_pos - light": AGREES,
+        "table_texture - light": AGREES,
+        "camera_pos - table_texture (bc_shift)": DISAGREES,
+        "camera_pos - light (bc_shift)": DISAGREES,
+        "table_texture - light (bc_shift)": DISAGREES,
+    }
+    alone = {row[0] for row in comparison_rows(decide(claims[1:], cfg, rows))}
+    assert alone == {"camera_pos - table_texture", "camera_pos - light", "table_texture - light"}  # nothing to tell apart

@@ -122,14 +122,18 @@ def claim_rows(verdicts: Sequence[ClaimVerdict]) -> list[tuple[str, str, str, st
 
 
 def comparison_rows(verdicts: Sequence[ClaimVerdict]) -> list[tuple[str, str, str, str, str, str]]:
-    """Every comparison behind the claims, once (:data:`COMPARISON_COLUMNS`); none when each claim is one
+    """Every comparison behind the claims, once (:data:`COMPARISON_COLUMNS`), named with its claim's task and, where
+    the claims name different methods, its method (unnamed: the study's first); none when each claim is one
     comparison (the claims table shows them all)."""
     if not any(len(v.comparisons) > 1 for v in verdicts):
         return []
+    several_methods = len({v.claim.method for v in verdicts}) > 1  # name a claim's method where claims differ
     seen: dict[str, Decided] = {}
     for v in verdicts:
+        named = [v.claim.method if several_methods else None, v.claim.task]
+        qualifier = ", ".join(q for q in named if q)
         for d in v.comparisons:
-            seen.setdefault(d.label + (f" ({v.claim.task})" if v.claim.task else ""), d)
+            seen.setdefault(d.label + (f" ({qualifier})" if qualifier else ""), d)
     return [
         (label, _num(d.point), _interval(d), f"{d.p_value:.4f}", d.verdict, to_resolve(d)) for label, d in seen.items()
     ]
