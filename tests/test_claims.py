@@ -309,4 +309,8 @@ def test_one_claim_for_two_methods_lists_each_method_s_comparisons(cfg):
         "table_texture - light (bc_shift)": DISAGREES,
     }
     alone = {row[0] for row in comparison_rows(decide(claims[1:], cfg, rows))}
-    assert alone == {"camera_pos - table_texture", "camera_pos - light", "table_texture - light"}  # nothing to tell apart
+    assert alone == {
+        "camera_pos - table_texture",
+        "camera_pos - light",
+        "table_texture - light",
+    }  # nothing to tell apart
