@@ -254,7 +254,8 @@ class ReportConfig:
 
     Attributes:
         results: The study's ``results.csv``.
-        config: The study's config YAML (also ``--config_path``); default: ``config.yaml`` next to ``results``.
+        config: The study's config YAML, or a packaged study's name (also ``--config_path``); default: the config
+            next to ``results``.
         out: Folder to write ``report.md`` and the plots into, with copies of ``results.csv``, the config (as
             ``config.yaml``) and the task families' CSV files; default: the folder of ``results``.
     """
@@ -267,8 +268,8 @@ class ReportConfig:
         if not self.results:
             raise ValueError("factorworld report needs --results=PATH/results.csv")
         check_input_file(self.results, "results")
-        if self.config:
-            check_input_file(self.config, "config_path")
+        if self.config:  # a path, or a packaged study's name (learning/rt1)
+            self.config = resolve_study_config(self.config)
         if self.out:
             check_folder_target(self.out, "out")
 
@@ -402,7 +403,8 @@ class MergeResultsConfig:
     Attributes:
         into: The study folder to merge into (holds ``results.csv`` and the study's config).
         add: Folders of the other parts (each holds ``results.csv``).
-        config: The study's config (default: the one next to ``into``'s ``results.csv``).
+        config: The study's config, a path or a packaged study's name (default: the one next to ``into``'s
+            ``results.csv``).
     """
 
     into: str = ""
@@ -416,8 +418,8 @@ class MergeResultsConfig:
             if not Path(folder).is_dir():
                 raise FileNotFoundError(f"{name} {folder} is not a study folder")
             check_input_file(_results_file(folder), name)
-        if self.config:
-            check_input_file(self.config, "config")
+        if self.config:  # a path, or a packaged study's name
+            self.config = resolve_study_config(self.config)
 
 
 def cmd_merge_results(args: list[str]) -> None:

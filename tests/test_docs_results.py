@@ -62,6 +62,7 @@ PUBLISHED = {
     "f2_gap_vs_n_400_demos": ROOT / "docs" / "findings.md",
     "f2_gap_vs_n_400_demos_n5_20": ROOT / "docs" / "findings.md",
     "f6_pretrained": ROOT / "docs" / "findings.md",
+    "learning_rt1": ROOT / "docs" / "rt1.md",
 }  # committed studies and a page that must quote them
 
 
@@ -249,6 +250,24 @@ def test_report_command_refuses_bad_input_in_one_line(case, studies, capsys):
     err = capsys.readouterr().err
     assert exit_.value.code in (1, 2) and err.startswith("error: ") and len(err.splitlines()) == 1
     assert expected in err
+
+
+def test_report_and_merge_take_a_packaged_study_s_name_for_its_config(tmp_path, capsys):
+    """``--config=quick`` names the packaged study, as ``factorworld study`` reads it; an unknown name is one line
+    naming the valid ones, before anything is written."""
+    published = ROOT / RESULTS_ROOT / "quick"
+    out = tmp_path / "named"
+    assert main(["report", f"--results={published / 'results.csv'}", "--config=quick", f"--out={out}"]) is None
+    assert (out / REPORT_FILE).read_text() == (published / REPORT_FILE).read_text()
+    for command in (
+        ["report", f"--results={published / 'results.csv'}", "--config=no_such_study", f"--out={tmp_path / 'x'}"],
+        ["merge-results", f"--into={out}", f"--add=[{published}]", "--config=no_such_study"],
+    ):
+        with pytest.raises(SystemExit):
+            main(command)
+        err = capsys.readouterr().err
+        assert len(err.splitlines()) == 1 and "no packaged study of that name; valid names: " in err and "quick" in err
+    assert not (tmp_path / "x").exists()
 
 
 def test_the_installed_report_command_prints_one_line_and_no_traceback(studies):
