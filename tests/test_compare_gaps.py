@@ -35,7 +35,10 @@ def test_the_gaps_are_each_studys_seed_mean_and_the_difference_theirs():
         cells = [
             r
             for r in rows
-            if r["task"] == "pick-place" and r["condition"] == "object_texture" and r["seed"] in result.seeds
+            if r["method"] == PICK_PLACE.method
+            and r["task"] == "pick-place"
+            and r["condition"] == "object_texture"
+            and r["seed"] in result.seeds
         ]
         assert gap == pytest.approx(sum(r["gap"] for r in cells) / len(cells)) and low < gap < high
     difference, low, high = result.difference
