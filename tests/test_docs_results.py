@@ -63,6 +63,7 @@ PUBLISHED = {
     "f2_gap_vs_n_400_demos_n5_20": ROOT / "docs" / "findings.md",
     "f6_pretrained": ROOT / "docs" / "findings.md",
     "learning_rt1": ROOT / "docs" / "rt1.md",
+    "rt1_curve_pick": ROOT / "docs" / "rt1.md",
 }  # committed studies and a page that must quote them
 
 
