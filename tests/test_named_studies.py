@@ -67,9 +67,18 @@ def test_a_wheel_in_a_fresh_environment_runs_a_study_by_name_and_lerobot_finds_t
         uv = [shutil.which("uv") or "uv"]
     env = {**os.environ, "UV_PYTHON_DOWNLOADS": "never", "MUJOCO_GL": "egl"}
     env.pop("VIRTUAL_ENV", None)
-    wheels = tmp_path / "wheels"
+    wheels, source = tmp_path / "wheels", tmp_path / "source"
+    # built from a copy of the checkout's files (tracked or not ignored): setuptools' build/ folder in the checkout
+    # keeps files deleted since, which would end up in the wheel
+    listed = subprocess.run(
+        ["git", "ls-files", "-co", "--exclude-standard", "-z"], cwd=ROOT, check=True, capture_output=True, text=True
+    ).stdout
+    for name in filter(None, listed.split("\0")):
+        if (ROOT / name).is_file():
+            (source / name).parent.mkdir(parents=True, exist_ok=True)
+            shutil.copy2(ROOT / name, source / name)
     subprocess.run(
-        [*uv, "build", "--wheel", "--out-dir", str(wheels), str(ROOT)], check=True, capture_output=True, env=env
+        [*uv, "build", "--wheel", "--out-dir", str(wheels), str(source)], check=True, capture_output=True, env=env
     )
     venv = tmp_path / "venv"
     subprocess.run([*uv, "venv", "--quiet", str(venv), "-p", sys.executable], check=True, env=env)
