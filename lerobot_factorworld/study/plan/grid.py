@@ -161,15 +161,9 @@ def _train_step(
     inputs = TrainInputs(
         policy=keyed_policy(policy),
         seed=seed,
-        steps=keyed["steps"],
-        epochs=keyed["epochs"],
-        batch_size=keyed["batch_size"],
-        threads=keyed["threads"],
-        device=keyed["device"],
-        extra_args=tuple(keyed_args(keyed["extra_args"])),
+        **{**keyed, "extra_args": tuple(keyed_args(keyed["extra_args"]))},  # weight files by content
         versions=versions(),
         epochs_over=epochs_over,
-        curve_every=keyed["curve_every"],  # no curve: left out of the key, as always
     )
     run = {"policy": policy, "extra_args": list(t.extra_args)}
     return Step("train", inputs.to_dict(), (collect.key, *(e.key for e in extras)), {**labels, RUN: run})

@@ -356,9 +356,7 @@ def _ordering_per_task_section(cfg: StudyConfig, rows: list[dict]) -> list[str]:
         lines.append(f"| {factor} | " + " | ".join(cells) + f" | {paper if paper is not None else '—'} |")
     rhos = []
     for t in tasks:
-        rho = spearman(ranks[t], PAPER_FACTOR_RANKS)
-        low, high = per_task[t].rho_interval(PAPER_FACTOR_RANKS)
-        rhos.append("n/a" if math.isnan(rho) else f"{rho:+.2f} {ci(low, high, digits=2)}")
+        rhos.append(_rho_cell((spearman(ranks[t], PAPER_FACTOR_RANKS), *per_task[t].rho_interval(PAPER_FACTOR_RANKS))))
     lines += ["| Spearman with the paper | " + " | ".join(rhos) + " | |"]
     return lines + other_methods + [""]
 
