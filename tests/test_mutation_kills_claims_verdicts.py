@@ -112,8 +112,15 @@ def test_two_seeds_give_a_decision_interval():
 def test_a_headroom_exactly_at_the_smallest_resolvable_effect_is_not_capped():
     """Capped means the statistic cannot move the paper's way by as much as the design resolves: a headroom of
     0.1 against a smallest effect of 0.1 can, so an interval across the threshold is not resolved; 0.05 is capped."""
-    assert claims._verdict(bare(headroom=0.1), -0.2, 0.3, 0.1) == NOT_RESOLVED
-    assert claims._verdict(bare(headroom=0.05), -0.2, 0.3, 0.1) == CAPPED
+    assert claims._verdict(bare(headroom=0.1), -0.2, 0.3, 0.1, counts_known=True) == NOT_RESOLVED
+    assert claims._verdict(bare(headroom=0.05), -0.2, 0.3, 0.1, counts_known=True) == CAPPED
+
+
+def test_no_resolvable_effect_is_capped_only_when_the_episode_counts_are_known():
+    """A NaN smallest effect means "nothing to resolve" (capped) when the counts are known, but "no power
+    computed" when they are not: then an interval across the threshold stays not resolved."""
+    assert claims._verdict(bare(headroom=0.5), -0.2, 0.3, math.nan, counts_known=True) == CAPPED
+    assert claims._verdict(bare(headroom=0.5), -0.2, 0.3, math.nan, counts_known=False) == NOT_RESOLVED
 
 
 # --- what would resolve the observed effect ---------------------------------------------------------------------

@@ -357,7 +357,7 @@ def decision_interval(reps: np.ndarray, per_seed: np.ndarray, level: float) -> t
     return min(float(lo), mean - half), max(float(hi), mean + half)
 
 
-def _verdict(c: Comparison, low: float, high: float, smallest: float, counts_known: bool = True) -> str:
+def _verdict(c: Comparison, low: float, high: float, smallest: float, *, counts_known: bool) -> str:
     """``smallest`` is NaN both when the success rates leave nothing to resolve (capped) and when the episode
     counts are unknown (``counts_known`` false: no power, so an unresolved comparison stays not resolved)."""
     if np.isfinite(low) and np.isfinite(high):
