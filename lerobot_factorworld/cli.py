@@ -426,14 +426,21 @@ def cmd_merge_results(args: list[str]) -> None:
     # the study's config checks its policies with LeRobot (~4 s): only when this command runs
     from .study.plan.grid import make_plan  # noqa: PLC0415
     from .study.report.write import config_next_to, load_config  # noqa: PLC0415
+    from .study.results.episodes import EPISODES_FILE  # noqa: PLC0415
     from .study.results.merge import merge_results  # noqa: PLC0415
 
     cfg = parse_config(MergeResultsConfig, args, "merge-results")
     into = Path(cfg.into)
     config = Path(cfg.config) if cfg.config else config_next_to(Path(_results_file(cfg.into)))
     plan = make_plan(load_config(config))
-    results, episodes, added = merge_results(into, [Path(f) for f in cfg.add], plan)
-    print(f"wrote {results}" + (f" and {episodes}" if episodes else " (no episodes.parquet: not every part has one)"))
+    written, added = merge_results(into, [Path(f) for f in cfg.add], plan)
+    results, others = written[0], [str(path) for path in written[1:]]
+    no_episodes = all(path.name != EPISODES_FILE for path in written)
+    print(
+        f"wrote {results}"
+        + (f" and {', '.join(others)}" if others else "")
+        + (f" (no {EPISODES_FILE}: not every part has one)" if no_episodes else "")
+    )
     print(f"added {added} evaluation(s); render it with: factorworld report --results={results}")
 
 

@@ -15,10 +15,12 @@ import pytest
 from lerobot_factorworld.cli import main
 from lerobot_factorworld.study.plan.grid import make_plan
 from lerobot_factorworld.study.report.write import load_config
-from lerobot_factorworld.study.results.merge import merge_results, merge_rows
+from lerobot_factorworld.study.results.curve import read_curve
+from lerobot_factorworld.study.results.merge import merge_curve_rows, merge_results, merge_rows
 from lerobot_factorworld.study.results.rows import read_results
 
 F1 = Path(__file__).resolve().parents[1] / "docs" / "results" / "f1_ordering"
+CURVE = Path(__file__).resolve().parents[1] / "docs" / "results" / "rt1_curve_pick"  # one training, five checkpoints
 
 
 def _part(tmp_path: Path, name: str, seeds: set[int]) -> Path:
@@ -47,7 +49,7 @@ def test_two_parts_merge_back_into_the_committed_bytes_in_either_order(tmp_path,
     seeds = {int(r["seed"]) for r in read_results(F1 / "results.csv")}
     assert len(seeds) >= 2
     first, second = _part(tmp_path, "first", {min(seeds)}), _part(tmp_path, "second", seeds - {min(seeds)})
-    results, episodes, added = merge_results(first, [second], plan)
+    (results, episodes), added = merge_results(first, [second], plan)
     assert results.read_bytes() == (F1 / "results.csv").read_bytes()
     assert added == len(read_results(second / "results.csv"))
     merged, committed = pq.read_table(episodes), pq.read_table(F1 / "episodes.parquet")
@@ -94,3 +96,29 @@ def test_the_command_merges_and_refuses_in_one_line_writing_nothing(tmp_path, ca
     out = capsys.readouterr().out
     assert f"wrote {first / 'results.csv'} and {first / 'episodes.parquet'}" in out and "factorworld report" in out
     assert (first / "results.csv").read_bytes() == (F1 / "results.csv").read_bytes()
+
+
+def test_a_learning_curve_made_in_parts_merges_back_into_its_committed_bytes(tmp_path):
+    """RT-1's committed pick curve split by checkpoint (the grid's last point, the ``train`` evaluation, in the
+    first part with the early ones): merging the parts in either order writes the committed ``curve.csv``."""
+    plan = make_plan(load_config(CURVE / "config.yaml"))
+    lines = (CURVE / "curve.csv").read_text().splitlines(keepends=True)
+    results = read_results(CURVE / "results.csv")
+    assert len(lines) - 1 >= 3 and len(results) == 1
+    parts = {}
+    for name, keep in [("early", lambda i: i < 2 or i == len(lines) - 2), ("late", lambda i: 2 <= i < len(lines) - 2)]:
+        folder = parts[name] = tmp_path / name
+        folder.mkdir()
+        shutil.copy(CURVE / "config.yaml", folder / "config.yaml")
+        shutil.copy(CURVE / "results.csv", folder / "results.csv")
+        (folder / "curve.csv").write_text(lines[0] + "".join(line for i, line in enumerate(lines[1:]) if keep(i)))
+    written, added = merge_results(parts["late"], [parts["early"]], plan)
+    assert added == 0 and parts["late"] / "curve.csv" in written
+    assert (parts["late"] / "curve.csv").read_bytes() == (CURVE / "curve.csv").read_bytes()
+    rows = read_curve(CURVE / "curve.csv")
+    assert merge_curve_rows([rows[2:], rows[:2]], plan, ["a", "b"]) == rows
+    changed = [{**rows[0], "successes": rows[0]["successes"] + 1}]
+    with pytest.raises(ValueError, match=rf"point {rows[0]['step']} differs between a and b in successes"):
+        merge_curve_rows([rows, changed], plan, ["a", "b"])
+    with pytest.raises(ValueError, match="is not in the study's plan"):
+        merge_curve_rows([[{**rows[0], "step": "e" * 16}]], plan, ["a"])

@@ -193,6 +193,19 @@ def test_a_pick_study_report_sets_success_next_to_the_papers_real_robot_table():
     assert "**+1.00**" in text and "easiest first here: light, table_texture, camera_pos" in text
     door = [dict(r, task="door-open") for r in rows]
     assert _real_robot_section(cfg, door) == []
+    # two methods: one table holds both (a second table without its header would render as text), each
+    # method's Spearman line under it
+    from lerobot_factorworld.study.plan.config import MethodConfig
+
+    two = replace(cfg, methods=[cfg.methods[0], MethodConfig("other", {"type": "bc", "augmentation": "shift"})])
+    lines = _real_robot_section(two, rows + [dict(r, method="other") for r in rows])
+    table = [i for i, line in enumerate(lines) if line.startswith("|")]
+    assert table == list(range(table[0], table[0] + 2 + 2 * len(successes)))  # header, rule, 5 rows per method
+    assert sum(line.startswith("| method |") for line in lines) == 1
+    assert [line.split(":")[0] for line in lines[table[-1] + 1 :] if "Spearman" in line] == [
+        cfg.methods[0].name,
+        "other",
+    ]
 
 
 # --- protocol -----------------------------------------------------------------------------------

@@ -77,6 +77,7 @@ def real_robot_section(cfg: StudyConfig, rows: Sequence[dict]) -> list[str]:
         "| method | condition | paper (real robot) | successes | success rate [95%, seeds pooled: bootstrap] |",
         "|---|---|---|---|---|",
     ]
+    orderings = []  # each method's Spearman line, under the one table of every method
     for method in cfg.methods:
         rates = {}
         for condition in [TRAIN_SUITE, *cfg.conditions()]:
@@ -90,9 +91,8 @@ def real_robot_section(cfg: StudyConfig, rows: Sequence[dict]) -> list[str]:
                 f"| {method.name} | {name} (`{condition}`) | {'—' if paper is None else f'{paper:.1f}%'} | {k}/{n} | "
                 f"{k / n:.2f} {ci(low, high, digits=2, sign=False)} |"
             )
-        lines += _ordering_lines(method.name, rates, [r for r in pick if r["method"] == method.name])
-        lines.append("")
-    return lines
+        orderings += _ordering_lines(method.name, rates, [r for r in pick if r["method"] == method.name])
+    return [*lines, *orderings, ""]
 
 
 def _ordering_lines(method: str, rates: dict[str, float], rows: Sequence[dict]) -> list[str]:

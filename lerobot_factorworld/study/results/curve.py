@@ -92,9 +92,11 @@ def write_curve(rows: Sequence[dict[str, Any]], path: Path) -> Path:
 
 
 def read_curve(path: str | Path) -> list[dict[str, Any]]:
-    """``curve.csv``'s rows with their numbers as numbers."""
+    """``curve.csv``'s rows with their numbers as numbers (epochs as :func:`curve_rows` holds them, whole ones as
+    integers, so that written again they give the same bytes)."""
     integers = ("n_train_envs", "seed", "steps", "episodes", "successes")
-    return read_table(path, CURVE_COLUMNS, integers, ("epochs", "success_rate", "ci_low", "ci_high"))
+    rows = read_table(path, CURVE_COLUMNS, integers, ("epochs", "success_rate", "ci_low", "ci_high"))
+    return [{**row, "epochs": whole_epochs(row["epochs"])} for row in rows]
 
 
 def pooled_curve(rows: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:

@@ -1,5 +1,5 @@
 """One study's results made in parts (other machines, sessions or commits, each with its own step folders) as one
-``results.csv`` and ``episodes.parquet``: ``factorworld merge-results``. Every row keeps the commit and source
+``results.csv``, ``episodes.parquet`` and ``curve.csv`` (a learning curve's points): ``factorworld merge-results``. Every row keeps the commit and source
 hash that made it, so the merged file says which part each number came from; ``factorworld report`` then
 renders the whole.
 
@@ -17,6 +17,8 @@ from pathlib import Path
 from typing import Any
 
 from ..plan.grid import Plan
+from .curve import CELL as CURVE_CELL
+from .curve import CURVE_FILE, read_curve, write_curve
 from .episodes import EPISODES_FILE, read_episodes, write_episodes
 from .rows import RESULT_COLUMNS, RESULTS_FILE, read_results, write_results
 
@@ -62,14 +64,40 @@ def merge_rows(parts: Sequence[Sequence[dict[str, Any]]], plan: Plan, names: Seq
     return [row for row, _ in sorted(by_step.values(), key=lambda item: order[item[0]["step"]])]
 
 
-def merge_results(into: Path, others: Sequence[Path], plan: Plan) -> tuple[Path, Path | None, int]:
-    """Merge the ``results.csv`` (and ``episodes.parquet``, where every part has one) of the folders ``others``
-    into folder ``into``, checked in full before anything is written; returns the written paths and the rows
-    added."""
+def merge_curve_rows(
+    parts: Sequence[Sequence[dict[str, Any]]], plan: Plan, names: Sequence[str]
+) -> list[dict[str, Any]]:
+    """The learning-curve points of every part, each evaluation once and the same numbers where two parts hold
+    it, sorted as ``curve.csv`` sorts them (cell, then epochs); a point the plan does not hold is refused."""
+    planned = {s.key for s in plan.curve_points()} | {s.key for s in plan.evaluations()}
+    by_step: dict[str, tuple[dict[str, Any], str]] = {}
+    for part, name in zip(parts, names):
+        for row in part:
+            if row["step"] not in planned:
+                raise ValueError(
+                    f"the learning-curve point {row['step']} of {name} is not in the study's plan: pass its config"
+                )
+            seen = by_step.get(row["step"])
+            if seen is not None and not _same(seen[0], row):
+                differ = [c for c in row if not _same({c: seen[0][c]}, {c: row[c]})]
+                raise ValueError(
+                    f"the learning-curve point {row['step']} differs between {seen[1]} and {name} in {', '.join(differ)}"
+                )
+            by_step.setdefault(row["step"], (row, name))
+    rows = [row for row, _ in by_step.values()]
+    return sorted(rows, key=lambda r: ([str(r[c]) for c in CURVE_CELL], r["epochs"]))
+
+
+def merge_results(into: Path, others: Sequence[Path], plan: Plan) -> tuple[list[Path], int]:
+    """Merge the ``results.csv`` (``episodes.parquet``, where every part has one; ``curve.csv``, where any part
+    has one) of the folders ``others`` into folder ``into``, checked in full before anything is written; returns
+    the written paths and the rows added."""
     folders = [into, *others]
     parts = [read_results(folder / RESULTS_FILE) for folder in folders]
     names = [str(folder) for folder in folders]
     rows = merge_rows(parts, plan, names)
+    curved = [folder for folder in folders if (folder / CURVE_FILE).is_file()]
+    curve = merge_curve_rows([read_curve(f / CURVE_FILE) for f in curved], plan, [str(f) for f in curved])
     episodes = None
     if all((folder / EPISODES_FILE).is_file() for folder in folders):
         kept = {row["step"] for row in rows}
@@ -84,8 +112,10 @@ def merge_results(into: Path, others: Sequence[Path], plan: Plan) -> tuple[Path,
         order = {row["step"]: i for i, row in enumerate(rows)}
         merged.sort(key=lambda e: (order[e["step"]], e["episode_ix"]))
         episodes = write_episodes(merged, into / EPISODES_FILE)
-    written = write_results(rows, into / RESULTS_FILE)
-    return written, episodes, len(rows) - len(parts[0])
+    written = [write_results(rows, into / RESULTS_FILE), *([episodes] if episodes else [])]
+    if curved:
+        written.append(write_curve(curve, into / CURVE_FILE))
+    return written, len(rows) - len(parts[0])
 
 
 def _same(a: dict[str, Any], b: dict[str, Any]) -> bool:
