@@ -72,7 +72,8 @@ def real_robot_section(cfg: StudyConfig, rows: Sequence[dict]) -> list[str]:
         f"Success pooled over tasks of the pick family, N and the {seeds} training seed(s); the 95% interval is the "
         "seed-level bootstrap's (training seeds resampled, then episodes within each seed's cells), widened where "
         "needed to contain the Wilson interval of the pooled episodes (with one seed: the Wilson interval). The "
-        "paper's numbers are RT-1 on a real robot, 12 trials per factor (section 5.1).",
+        "paper's numbers are RT-1 on a real robot, 12 trials per new value of a factor (2 in each of 6 tasks), 24-36 "
+        "per factor (section 5.1).",
         "",
         "| method | condition | paper (real robot) | successes | success rate [95%, seeds pooled: bootstrap] |",
         "|---|---|---|---|---|",

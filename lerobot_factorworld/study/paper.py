@@ -32,9 +32,9 @@ PAPER_FACTOR_RANKS_STATED: dict[str, float] = {
 
 
 PAPER_REAL_ROBOT: dict[str, tuple[str, float | None]] = {
-    # Section 5.1's real-robot success rates (RT-1 with crop + photometric augmentation, 12 trials per
-    # factor), by the Factor World condition that plays the factor's part in simulation; the two
-    # language conditions have no counterpart in the paper.
+    # Section 5.1's real-robot success rates (RT-1 with crop + photometric augmentation; 12 trials per new
+    # value of a factor, 2 in each of 6 tasks, 2-3 values per factor), by the Factor World condition that plays
+    # the factor's part in simulation; the two language conditions have no counterpart in the paper.
     "train": ("original", 91.7),
     "floor_texture": ("new background", 88.9),
     "distractors": ("new distractors", 80.6),
