@@ -405,11 +405,14 @@ class MergeResultsConfig:
         add: Folders of the other parts (each holds ``results.csv``).
         config: The study's config, a path or a packaged study's name (default: the one next to ``into``'s
             ``results.csv``).
+        drop_unplanned: Leave out the rows (and their episodes and curve points) of steps the config no longer
+            plans, e.g. a method whose training budget changed, instead of refusing them; each is listed.
     """
 
     into: str = ""
     add: list[str] = field(default_factory=list)
     config: str = ""
+    drop_unplanned: bool = False
 
     def __post_init__(self) -> None:
         if not self.into or not self.add:
@@ -427,13 +430,16 @@ def cmd_merge_results(args: list[str]) -> None:
     from .study.plan.grid import make_plan  # noqa: PLC0415
     from .study.report.write import config_next_to, load_config  # noqa: PLC0415
     from .study.results.episodes import EPISODES_FILE  # noqa: PLC0415
-    from .study.results.merge import merge_results  # noqa: PLC0415
+    from .study.results.merge import CELL, merge_results  # noqa: PLC0415
 
     cfg = parse_config(MergeResultsConfig, args, "merge-results")
     into = Path(cfg.into)
     config = Path(cfg.config) if cfg.config else config_next_to(Path(_results_file(cfg.into)))
     plan = make_plan(load_config(config))
-    written, added = merge_results(into, [Path(f) for f in cfg.add], plan)
+    merged = merge_results(into, [Path(f) for f in cfg.add], plan, drop_unplanned=cfg.drop_unplanned)
+    for row in merged.dropped:
+        print(f"dropped {row['step']} ({' '.join(f'{c}={row[c]}' for c in CELL)}): not in the study's plan")
+    written, added = merged.written, merged.added
     results, others = written[0], [str(path) for path in written[1:]]
     no_episodes = all(path.name != EPISODES_FILE for path in written)
     print(

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import csv
 import shutil
+from dataclasses import replace
 from pathlib import Path
 
 import pyarrow as pa
@@ -20,6 +21,7 @@ from lerobot_factorworld.study.results.merge import merge_curve_rows, merge_resu
 from lerobot_factorworld.study.results.rows import read_results
 
 F1 = Path(__file__).resolve().parents[1] / "docs" / "results" / "f1_ordering"
+F9 = Path(__file__).resolve().parents[1] / "docs" / "results" / "f9_pick"  # two methods, one with a learning curve
 CURVE = Path(__file__).resolve().parents[1] / "docs" / "results" / "rt1_curve_pick"  # one training, five checkpoints
 
 
@@ -49,9 +51,10 @@ def test_two_parts_merge_back_into_the_committed_bytes_in_either_order(tmp_path,
     seeds = {int(r["seed"]) for r in read_results(F1 / "results.csv")}
     assert len(seeds) >= 2
     first, second = _part(tmp_path, "first", {min(seeds)}), _part(tmp_path, "second", seeds - {min(seeds)})
-    (results, episodes), added = merge_results(first, [second], plan)
+    merged = merge_results(first, [second], plan)
+    (results, episodes), added = merged.written, merged.added
     assert results.read_bytes() == (F1 / "results.csv").read_bytes()
-    assert added == len(read_results(second / "results.csv"))
+    assert added == len(read_results(second / "results.csv")) and merged.dropped == []
     merged, committed = pq.read_table(episodes), pq.read_table(F1 / "episodes.parquet")
     assert merged.select(committed.column_names).equals(committed)
     again = _part(tmp_path, "again", seeds - {min(seeds)})
@@ -112,8 +115,8 @@ def test_a_learning_curve_made_in_parts_merges_back_into_its_committed_bytes(tmp
         shutil.copy(CURVE / "config.yaml", folder / "config.yaml")
         shutil.copy(CURVE / "results.csv", folder / "results.csv")
         (folder / "curve.csv").write_text(lines[0] + "".join(line for i, line in enumerate(lines[1:]) if keep(i)))
-    written, added = merge_results(parts["late"], [parts["early"]], plan)
-    assert added == 0 and parts["late"] / "curve.csv" in written
+    merged = merge_results(parts["late"], [parts["early"]], plan)
+    assert merged.added == 0 and parts["late"] / "curve.csv" in merged.written
     assert (parts["late"] / "curve.csv").read_bytes() == (CURVE / "curve.csv").read_bytes()
     rows = read_curve(CURVE / "curve.csv")
     assert merge_curve_rows([rows[2:], rows[:2]], plan, ["a", "b"]) == rows
@@ -122,3 +125,26 @@ def test_a_learning_curve_made_in_parts_merges_back_into_its_committed_bytes(tmp
         merge_curve_rows([rows, changed], plan, ["a", "b"])
     with pytest.raises(ValueError, match="is not in the study's plan"):
         merge_curve_rows([[{**rows[0], "step": "e" * 16}]], plan, ["a"])
+
+
+def test_rows_a_changed_config_no_longer_plans_are_refused_or_dropped_on_request(tmp_path, capsys):
+    """F9 whose config drops RT-1 (as a changed training budget would re-key it): its rows, episodes and curve
+    points are refused by default; ``--drop_unplanned=true`` leaves them out, lists each, and keeps the rest."""
+    cfg = load_config(F9 / "config.yaml")
+    kept = [m for m in cfg.methods if m.name != "rt1_small"]
+    assert len(kept) == len(cfg.methods) - 1 and cfg.curve_methods()
+    plan = make_plan(replace(cfg, methods=kept, claims=[c for c in cfg.claims if c.method != "rt1_small"]))
+    folder = tmp_path / "f9"
+    shutil.copytree(F9, folder)
+    before = {name: (folder / name).read_bytes() for name in ("results.csv", "episodes.parquet", "curve.csv")}
+    with pytest.raises(ValueError, match="is not in the study's plan: .* --drop_unplanned=true"):
+        merge_results(folder, [], plan)
+    assert {name: (folder / name).read_bytes() for name in before} == before  # refused: nothing written
+    merged = merge_results(folder, [], plan, drop_unplanned=True)
+    rows = read_results(folder / "results.csv")
+    committed = read_results(F9 / "results.csv")
+    assert {r["method"] for r in rows} == {m.name for m in kept}
+    assert len(merged.dropped) == sum(r["method"] == "rt1_small" for r in committed) > 0 and merged.added == 0
+    assert not (folder / "curve.csv").exists()  # every point was RT-1's
+    episodes = pq.read_table(folder / "episodes.parquet")
+    assert set(episodes["step"].to_pylist()) == {r["step"] for r in rows}

@@ -13,6 +13,7 @@ study's plan, so merging in either order writes the same bytes.
 from __future__ import annotations
 
 from collections.abc import Sequence
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -60,7 +61,10 @@ def merge_rows(parts: Sequence[Sequence[dict[str, Any]]], plan: Plan, names: Seq
     order = {step.key: i for i, step in enumerate(plan.evaluations())}
     unplanned = [row for row, _ in by_step.values() if row["step"] not in order]
     if unplanned:
-        raise ValueError(f"{_label(unplanned[0])} ({unplanned[0]['step']}) is not in the study's plan: pass its config")
+        raise ValueError(
+            f"{_label(unplanned[0])} ({unplanned[0]['step']}) is not in the study's plan: pass its config, "
+            "or --drop_unplanned=true to leave out what it no longer plans"
+        )
     return [row for row, _ in sorted(by_step.values(), key=lambda item: order[item[0]["step"]])]
 
 
@@ -88,16 +92,32 @@ def merge_curve_rows(
     return sorted(rows, key=lambda r: ([str(r[c]) for c in CURVE_CELL], r["epochs"]))
 
 
-def merge_results(into: Path, others: Sequence[Path], plan: Plan) -> tuple[list[Path], int]:
+@dataclass(frozen=True)
+class Merged:
+    written: list[Path]  # results.csv first
+    added: int  # evaluations ``into`` did not hold
+    dropped: list[dict[str, Any]]  # rows the plan no longer holds (``drop_unplanned``), each part's
+
+
+def merge_results(into: Path, others: Sequence[Path], plan: Plan, drop_unplanned: bool = False) -> Merged:
     """Merge the ``results.csv`` (``episodes.parquet``, where every part has one; ``curve.csv``, where any part
-    has one) of the folders ``others`` into folder ``into``, checked in full before anything is written; returns
-    the written paths and the rows added."""
+    has one) of the folders ``others`` into folder ``into``, checked in full before anything is written.
+    ``drop_unplanned``: rows, episodes and curve points of steps the plan no longer holds (a method whose budget
+    the config changed) are left out instead of refused."""
     folders = [into, *others]
     parts = [read_results(folder / RESULTS_FILE) for folder in folders]
     names = [str(folder) for folder in folders]
-    rows = merge_rows(parts, plan, names)
     curved = [folder for folder in folders if (folder / CURVE_FILE).is_file()]
-    curve = merge_curve_rows([read_curve(f / CURVE_FILE) for f in curved], plan, [str(f) for f in curved])
+    curves = [read_curve(folder / CURVE_FILE) for folder in curved]
+    dropped: list[dict[str, Any]] = []
+    if drop_unplanned:
+        planned = {s.key for s in plan.evaluations()}
+        dropped = [row for part in parts for row in part if row["step"] not in planned]
+        parts = [[row for row in part if row["step"] in planned] for part in parts]
+        points = planned | {s.key for s in plan.curve_points()}
+        curves = [[row for row in part if row["step"] in points] for part in curves]
+    rows = merge_rows(parts, plan, names)
+    curve = merge_curve_rows(curves, plan, [str(f) for f in curved])
     episodes = None
     if all((folder / EPISODES_FILE).is_file() for folder in folders):
         kept = {row["step"] for row in rows}
@@ -113,9 +133,12 @@ def merge_results(into: Path, others: Sequence[Path], plan: Plan) -> tuple[list[
         merged.sort(key=lambda e: (order[e["step"]], e["episode_ix"]))
         episodes = write_episodes(merged, into / EPISODES_FILE)
     written = [write_results(rows, into / RESULTS_FILE), *([episodes] if episodes else [])]
-    if curved:
+    if curve:
         written.append(write_curve(curve, into / CURVE_FILE))
-    return written, len(rows) - len(parts[0])
+    elif curved:  # every point dropped: no curve left to show
+        (into / CURVE_FILE).unlink(missing_ok=True)
+    held = {row["step"] for row in parts[0]}
+    return Merged(written, sum(row["step"] not in held for row in rows), dropped)
 
 
 def _same(a: dict[str, Any], b: dict[str, Any]) -> bool:
