@@ -12,9 +12,11 @@ from pathlib import Path
 import pytest
 
 from lerobot_factorworld.core.settings import parse_config
+from lerobot_factorworld.study.metrics import newcombe_independent
 from lerobot_factorworld.study.plan.command import StudyCommand
 from lerobot_factorworld.study.plan.config import TrainSettings
 from lerobot_factorworld.study.plan.grid import CURVE_EPOCHS, make_plan
+from lerobot_factorworld.study.report.curve_report import curve_section
 from lerobot_factorworld.study.results.curve import CURVE_FILE, pooled_curve, read_curve
 from lerobot_factorworld.study.run.inputs import EvalInputs, TrainInputs
 from lerobot_factorworld.study.run.steps import curve_saves
@@ -109,6 +111,32 @@ def test_the_pooled_curve_sums_episodes_per_checkpoint_with_wilson_intervals():
     assert (first["epochs"], first["successes"], first["episodes"], first["cells"]) == (10.0, 8, 20, 2)
     assert first["success_rate"] == 0.4 and second["success_rate"] == 0.9
     assert first["ci_low"] == pytest.approx(0.2188, abs=1e-4) and first["ci_high"] == pytest.approx(0.6134, abs=1e-4)
+
+
+def test_newcombe_s_interval_for_two_independent_rates_is_his_published_example():
+    """Newcombe (1998), Table II, example (a): 56/70 against 48/80, difference 0.2000, method 10 gives
+    [0.0524, 0.3339]; no episodes on either side: no interval."""
+    diff, low, high = newcombe_independent(56, 70, 48, 80)
+    assert (diff, low, high) == pytest.approx((0.2, 0.0524, 0.3339), abs=5e-5)
+    assert all(math.isnan(v) for v in newcombe_independent(3, 10, 0, 0))
+
+
+def test_the_curve_section_gives_each_step_along_a_curve_and_each_method_against_the_first():
+    """Two methods on one task, two checkpoints each: one row of steps per curve (the first checkpoint has none
+    before it) and one row of the second method against the first at each checkpoint, each with Newcombe's
+    interval; one method with one checkpoint has no difference to show."""
+    rows = [
+        {"method": m, "task": "t", "epochs": e, "successes": k, "episodes": 30}
+        for m, e, k in [("a", 10, 7), ("a", 20, 1), ("b", 10, 7), ("b", 20, 7)]
+    ]
+    text = "\n".join(curve_section(rows, plotted=False))
+    cell = lambda d: f"{d[0]:+.2f} [{d[1]:+.2f}, {d[2]:+.2f}]"  # noqa: E731
+    steps = newcombe_independent(1, 30, 7, 30)
+    assert f"| a | its checkpoint before | t |  | {cell(steps)} |" in text
+    assert "| b | its checkpoint before | t |  | +0.00 [" in text
+    at_10, at_20 = newcombe_independent(7, 30, 7, 30), newcombe_independent(7, 30, 1, 30)
+    assert f"| b | a | t | {cell(at_10)} | {cell(at_20)} |" in text and at_20[1] > 0  # b's 20 epochs resolved above a's
+    assert "### Differences" not in "\n".join(curve_section(rows[:1], plotted=False))
 
 
 @pytest.mark.slow

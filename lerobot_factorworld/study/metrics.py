@@ -72,6 +72,21 @@ def newcombe_paired(a: float, b: float, c: float, d: float, z: float = Z95) -> t
     return gap, max(-1.0, lower), min(1.0, upper)
 
 
+def newcombe_independent(k1: int, n1: int, k2: int, n2: int, z: float = Z95) -> tuple[float, float, float]:
+    """``k1 / n1 - k2 / n2`` and Newcombe's (1998, method 10) hybrid score interval for two independent samples
+    (``nan`` where either has no episodes): for rates known only as counts, such as two checkpoints' P_T. Where
+    the episodes are in fact paired and positively correlated, it is wider than the paired interval."""
+    if n1 == 0 or n2 == 0:
+        return math.nan, math.nan, math.nan
+    p1, p2 = k1 / n1, k2 / n2
+    l1, u1 = wilson_interval(k1, n1, z)
+    l2, u2 = wilson_interval(k2, n2, z)
+    diff = p1 - p2
+    lower = diff - math.sqrt((p1 - l1) ** 2 + (u2 - p2) ** 2)
+    upper = diff + math.sqrt((u1 - p1) ** 2 + (p2 - l2) ** 2)
+    return diff, max(-1.0, lower), min(1.0, upper)
+
+
 def _phi_corrected(a: int, b: int, c: int, d: int) -> float:
     """Newcombe's phi: ``(ad - bc)`` reduced by ``n/2`` towards zero when positive, 0 if a margin is empty."""
     n = a + b + c + d

@@ -1,6 +1,8 @@
 """The report's "Learning curve" section and ``learning_curve.png`` from ``curve.csv`` (``train.curve_every``):
 P_T against training epochs per method and task, pooled over N and seeds, each point with its Wilson 95%
-interval, so a training budget is chosen from a measured curve, not a guess."""
+interval, so a training budget is chosen from a measured curve, not a guess; and the differences a reader would
+otherwise work out by eye (each checkpoint against the one before, each method against the first), each with
+Newcombe's interval."""
 
 from __future__ import annotations
 
@@ -8,6 +10,7 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
+from ..metrics import newcombe_independent
 from ..results.curve import CURVE_FILE, pooled_curve
 from .markdown import ci
 from .plots import draw_intervals, pyplot, save_figure
@@ -49,7 +52,48 @@ def curve_section(rows: Sequence[dict[str, Any]], plotted: bool) -> list[str]:
     lines += ["", "Each cell: P_T [95% interval] (episodes)."]
     if plotted:
         lines += ["", f"![learning curve]({CURVE_PLOT})", "", f"*{CURVE_CAPTION}*"]
-    return [*lines, ""]
+    return [*lines, *_differences(by_line, epochs), ""]
+
+
+def _differences(by_line: dict[tuple[str, str], dict[float, dict]], epochs: list[float]) -> list[str]:
+    """The curve's differences with Newcombe's 95% interval for independent samples, each on its own (not
+    corrected for the others): a description of where the curve moves, not a verdict."""
+    rows = []
+    for (method, task), points in by_line.items():
+        rows.append((method, "its checkpoint before", task, [
+            _diff(points.get(e), points.get(previous)) if previous is not None else ""
+            for previous, e in zip([None, *epochs], epochs)
+        ]))  # fmt: skip
+    first: dict[str, str] = {}
+    for method, task in by_line:
+        first.setdefault(task, method)
+    for (method, task), points in by_line.items():
+        if method != first[task]:
+            base = by_line[(first[task], task)]
+            rows.append((method, first[task], task, [_diff(points.get(e), base.get(e)) for e in epochs]))
+    if not any(cell for *_, cells in rows for cell in cells):
+        return []
+    return [
+        "",
+        "### Differences along the curve and between methods",
+        "",
+        "Each checkpoint's P_T minus the checkpoint before it on the same curve, and each method's minus the first "
+        "method's at the same epochs on the same task, with Newcombe's 95% interval for two independent samples "
+        "(each on its own, not corrected for the others: a description of where the curve moves, not a verdict). "
+        "The checkpoints play the same episode seeds; where that makes their outcomes positively correlated, a "
+        "paired interval would be narrower.",
+        "",
+        "| method | against | task | " + " | ".join(f"{e:g} epochs" for e in epochs) + " |",
+        "|---|---|---|" + "---|" * len(epochs),
+        *(f"| {method} | {against} | {task} | " + " | ".join(cells) + " |" for method, against, task, cells in rows),
+    ]
+
+
+def _diff(point: dict | None, other: dict | None) -> str:
+    if not point or not other:
+        return ""
+    diff, low, high = newcombe_independent(point["successes"], point["episodes"], other["successes"], other["episodes"])
+    return f"{diff:+.2f} {ci(low, high, 2)}"
 
 
 def plot_curve(rows: Sequence[dict[str, Any]], path: Path) -> bool:
