@@ -16,6 +16,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from lerobot_factorworld.study.metrics import wilson_interval
 from lerobot_factorworld.study.plan.config import MethodConfig, StudyConfig
 from lerobot_factorworld.study.report.claims_markdown import claim_rows
 from lerobot_factorworld.study.report.episode_videos import MANIFEST
@@ -23,6 +24,7 @@ from lerobot_factorworld.study.report.html_report import HTML_FILE, PLOTLY_JS, w
 from lerobot_factorworld.study.report.markdown import decide_claims, render
 from lerobot_factorworld.study.report.published import report_table
 from lerobot_factorworld.study.results.aggregate import factor_gap_bootstrap, per_task_success, task_orderings
+from lerobot_factorworld.study.results.curve import pooled_curve
 from lerobot_factorworld.study.run.recording import VIDEOS_DIR
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -257,6 +259,22 @@ def test_without_episodes_the_viewer_says_how_to_record_them(study, tmp_path):
     viewer = page.split('<section id="episodes">')[1]
     assert "<video" not in page and "episodes-data" not in page
     assert "eval.record_episodes" in viewer and "episodes/episodes.json" in viewer
+
+
+def test_a_learning_curve_is_drawn_with_the_report_tables_intervals_and_only_where_there_is_one(study, tmp_path):
+    """Two seeds' points of one checkpoint pool into one (as report.md's *Learning curve* table pools them), each
+    point with that table's Wilson interval; a study without a curve has no such section."""
+    cfg, rows, verdicts, _ = study
+    curve = [
+        {"method": "bc", "task": "door-open", "epochs": e, "successes": k, "episodes": 10}
+        for e, k in [(5, 2), (5, 4), (10, 9)]
+    ]
+    page = write_html_report(cfg, rows, tmp_path, verdicts, curve).read_text()
+    assert '<a href="#curve">Learning curve</a>' in page
+    drawn = intervals_drawn(figure(page, "curve-figure"), horizontal=False)
+    assert drawn == {"bc · door-open": [(p["ci_low"], p["ci_high"]) for p in pooled_curve(curve)]}
+    assert drawn["bc · door-open"][0] == pytest.approx(wilson_interval(6, 20))
+    assert 'id="curve"' not in write_html_report(cfg, rows, tmp_path / "none", verdicts).read_text()
 
 
 def test_the_page_is_deterministic_loads_nothing_from_the_network_and_writes_plotly_js_once(study, tmp_path):

@@ -1,6 +1,7 @@
 """``report.html``: the study's answer in one self-contained folder that opens from disk (no server, no network)
 and can be pushed to the Hub as it is: each factor's gap with its 95% interval (pooled and per task, the paper's
-rank beside it), the paper's claims with their verdicts, where episodes fail, success rates, and a viewer that
+rank beside it), the paper's claims with their verdicts, where episodes fail, success rates, the learning curve
+where the study has one (``curve.csv``), and a viewer that
 plays episode ``i`` under ``train`` and under a shift side by side, in sync (``episodes/episodes.json``,
 ``episode_videos.py``).
 
@@ -33,6 +34,7 @@ from ..results.aggregate import (
     task_orderings,
 )
 from ..results.claims import ClaimVerdict
+from ..results.curve import CURVE_FILE, pooled_curve
 from ..results.rows import RESULTS_FILE
 from ..run.recording import VIDEOS_DIR
 from .claims_markdown import CLAIM_COLUMNS, COMPARISON_COLUMNS, claim_rows, comparison_rows
@@ -65,10 +67,15 @@ NO_EPISODES = (
 
 
 def write_html_report(
-    cfg: StudyConfig, rows: Sequence[dict], out_dir: str | Path, verdicts: Sequence[ClaimVerdict]
+    cfg: StudyConfig,
+    rows: Sequence[dict],
+    out_dir: str | Path,
+    verdicts: Sequence[ClaimVerdict],
+    curve: Sequence[dict] = (),
 ) -> Path:
     """Write ``out_dir/report.html`` (and ``plotly.min.js`` where the folder has no copy of it) from ``results.csv``
-    rows and the claims decided on them (``markdown.decide_claims``); the viewer reads ``out_dir/episodes/``."""
+    rows, the claims decided on them (``markdown.decide_claims``) and the learning curve's points (``curve.csv``'s
+    rows; none: no such section); the viewer reads ``out_dir/episodes/``."""
     out_dir = Path(out_dir)
     rows = list(rows)
     sections = [
@@ -76,6 +83,7 @@ def write_html_report(
         ("claims", "The paper's claims", _claims_section(verdicts)),
         ("stages", "Where episodes fail", _stages_section(cfg, rows)),
         ("success", "Success rates", _success_section(cfg, rows)),
+        *([("curve", "Learning curve", _curve_section(curve))] if curve else []),
         ("episodes", "Paired episodes", _viewer_section(out_dir)),
     ]
     entries = _episodes(out_dir)
@@ -260,6 +268,31 @@ def _success_section(cfg: StudyConfig, rows: Sequence[dict]) -> str:
         "pooled over seeds, with the 95% intervals of report.md's <i>Success per task and N</i> table: the "
         "seed-level bootstrap's, widened to contain the Wilson interval of the pooled episodes (with one seed: "
         "Wilson's)."
+    )
+    return _figure(figure, caption, escape=False)
+
+
+def _curve_section(curve: Sequence[dict]) -> str:
+    pooled = pooled_curve(curve)
+    epochs = sorted({p["epochs"] for p in pooled})
+    keys = [f"{e:g}" for e in epochs]
+    series: dict[str, dict[str, Interval]] = {}
+    hover: dict[str, dict[str, str]] = {}
+    for p in pooled:
+        name, key = f"{p['method']} · {p['task']}", f"{p['epochs']:g}"
+        series.setdefault(name, {})[key] = (p["success_rate"], p["ci_low"], p["ci_high"])
+        hover.setdefault(name, {})[key] = (
+            f"{p['epochs']:g} epochs: {p['successes']}/{p['episodes']} = {p['success_rate']:.2f} "
+            f"{ci(p['ci_low'], p['ci_high'], digits=2, sign=False)}"
+        )
+    figure = _interval_figure(
+        "curve-figure", keys, [f"{k} epochs" for k in keys], series, axis="P_T (pooled), 95% interval", hover=hover
+    )
+    caption = (
+        "P_T (success on the training environments) of each checkpoint the training saved, per method and task, "
+        f"pooled over N and seeds, with the Wilson 95% intervals of report.md's <i>Learning curve</i> table "
+        f"(<code>{CURVE_FILE}</code>); report.md gives each checkpoint against the one before and each method "
+        "against the first."
     )
     return _figure(figure, caption, escape=False)
 

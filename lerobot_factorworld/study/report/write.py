@@ -94,7 +94,7 @@ def render_report(
     text = render(cfg, rows, plots, command, planned, family_sections, verdicts)
     if tail:
         text = text.rstrip("\n") + "\n\n" + "\n".join(tail)
-    write_html_report(cfg, rows, out_dir, verdicts)
+    write_html_report(cfg, rows, out_dir, verdicts, curve)
     return atomic_write_text(out_dir / REPORT_FILE, text), plots
 
 
