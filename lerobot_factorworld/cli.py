@@ -406,7 +406,8 @@ class MergeResultsConfig:
         config: The study's config, a path or a packaged study's name (default: the one next to ``into``'s
             ``results.csv``).
         drop_unplanned: Leave out the rows (and their episodes and curve points) of steps the config no longer
-            plans, e.g. a method whose training budget changed, instead of refusing them; each is listed.
+            plans, e.g. a method whose training budget changed, instead of refusing them; each dropped row is
+            listed. A part none of whose rows the config plans is still refused (a wrong config).
     """
 
     into: str = ""
@@ -430,15 +431,19 @@ def cmd_merge_results(args: list[str]) -> None:
     from .study.plan.grid import make_plan  # noqa: PLC0415
     from .study.report.write import config_next_to, load_config  # noqa: PLC0415
     from .study.results.episodes import EPISODES_FILE  # noqa: PLC0415
-    from .study.results.merge import CELL, merge_results  # noqa: PLC0415
+    from .study.results.merge import cell_label, merge_results  # noqa: PLC0415
 
     cfg = parse_config(MergeResultsConfig, args, "merge-results")
     into = Path(cfg.into)
     config = Path(cfg.config) if cfg.config else config_next_to(Path(_results_file(cfg.into)))
-    plan = make_plan(load_config(config))
-    merged = merge_results(into, [Path(f) for f in cfg.add], plan, drop_unplanned=cfg.drop_unplanned)
+    study = load_config(config)
+    merged = merge_results(
+        into, [Path(f) for f in cfg.add], make_plan(study), study=study.name, drop_unplanned=cfg.drop_unplanned
+    )
     for row in merged.dropped:
-        print(f"dropped {row['step']} ({' '.join(f'{c}={row[c]}' for c in CELL)}): not in the study's plan")
+        print(f"dropped {row['step']} ({cell_label(row)}): not in the study's plan")
+    for note in merged.notes:
+        print(note)
     written, added = merged.written, merged.added
     results, others = written[0], [str(path) for path in written[1:]]
     no_episodes = all(path.name != EPISODES_FILE for path in written)

@@ -271,9 +271,14 @@ def test_a_learning_curve_is_drawn_with_the_report_tables_intervals_and_only_whe
     ]
     page = write_html_report(cfg, rows, tmp_path, verdicts, curve).read_text()
     assert '<a href="#curve">Learning curve</a>' in page
-    drawn = intervals_drawn(figure(page, "curve-figure"), horizontal=False)
-    assert drawn == {"bc · door-open": [(p["ci_low"], p["ci_high"]) for p in pooled_curve(curve)]}
-    assert drawn["bc · door-open"][0] == pytest.approx(wilson_interval(6, 20))
+    (line,) = figure(page, "curve-figure")
+    ends = [
+        (y - minus, y + plus)
+        for y, minus, plus in zip(line["y"], *(line["error_y"][k] for k in ("arrayminus", "array")))
+    ]
+    assert line["name"] == "bc · door-open" and line["x"] == [5, 10]  # epochs to scale, not categories
+    assert np.allclose(ends, [(p["ci_low"], p["ci_high"]) for p in pooled_curve(curve)])
+    assert ends[0] == pytest.approx(wilson_interval(6, 20))
     assert 'id="curve"' not in write_html_report(cfg, rows, tmp_path / "none", verdicts).read_text()
 
 

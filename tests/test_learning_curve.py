@@ -122,21 +122,24 @@ def test_newcombe_s_interval_for_two_independent_rates_is_his_published_example(
 
 
 def test_the_curve_section_gives_each_step_along_a_curve_and_each_method_against_the_first():
-    """Two methods on one task, two checkpoints each: one row of steps per curve (the first checkpoint has none
-    before it) and one row of the second method against the first at each checkpoint, each with Newcombe's
-    interval; one method with one checkpoint has no difference to show."""
-    rows = [
-        {"method": m, "task": "t", "epochs": e, "successes": k, "episodes": 30}
-        for m, e, k in [("a", 10, 7), ("a", 20, 1), ("b", 10, 7), ("b", 20, 7)]
-    ]
-    text = "\n".join(curve_section(rows, plotted=False))
+    """Two methods on one task saving at other epochs (``b`` at 4, 8, 12; ``a`` at 6, 12), ``b`` first in the
+    config: each curve's steps are from its own checkpoint before, and ``a`` is set against ``b`` where both have
+    a checkpoint, each with Newcombe's interval; one method with one checkpoint has no difference to show."""
+    points = [("a", 6, 7), ("a", 12, 1), ("b", 4, 1), ("b", 8, 7), ("b", 12, 8)]
+    rows = [{"method": m, "task": "t", "epochs": e, "successes": k, "episodes": 30} for m, e, k in points]
+    text = "\n".join(curve_section(rows, plotted=False, methods=["b", "a"]))
     cell = lambda d: f"{d[0]:+.2f} [{d[1]:+.2f}, {d[2]:+.2f}]"  # noqa: E731
-    steps = newcombe_independent(1, 30, 7, 30)
-    assert f"| a | its checkpoint before | t |  | {cell(steps)} |" in text
-    assert "| b | its checkpoint before | t |  | +0.00 [" in text
-    at_10, at_20 = newcombe_independent(7, 30, 7, 30), newcombe_independent(7, 30, 1, 30)
-    assert f"| b | a | t | {cell(at_10)} | {cell(at_20)} |" in text and at_20[1] > 0  # b's 20 epochs resolved above a's
-    assert "### Differences" not in "\n".join(curve_section(rows[:1], plotted=False))
+    a_step, b_steps = (
+        newcombe_independent(1, 30, 7, 30),
+        [newcombe_independent(7, 30, 1, 30), newcombe_independent(8, 30, 7, 30)],
+    )
+    assert "| method | against | task | 4 epochs | 6 epochs | 8 epochs | 12 epochs |" in text
+    assert f"| a | its checkpoint before | t |  |  |  | {cell(a_step)} |" in text
+    assert f"| b | its checkpoint before | t |  |  | {cell(b_steps[0])} | {cell(b_steps[1])} |" in text
+    against = newcombe_independent(1, 30, 8, 30)
+    assert f"| a | b | t |  |  |  | {cell(against)} |" in text and against[2] < 0  # a's 12 epochs resolved below b's
+    assert "| b | a |" not in text
+    assert "### Differences" not in "\n".join(curve_section(rows[:1], plotted=False, methods=["a"]))
 
 
 @pytest.mark.slow

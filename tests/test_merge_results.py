@@ -17,7 +17,7 @@ from lerobot_factorworld.cli import main
 from lerobot_factorworld.study.plan.grid import make_plan
 from lerobot_factorworld.study.report.write import load_config
 from lerobot_factorworld.study.results.curve import read_curve
-from lerobot_factorworld.study.results.merge import merge_curve_rows, merge_results, merge_rows
+from lerobot_factorworld.study.results.merge import CELL, merge_curve_rows, merge_results, merge_rows
 from lerobot_factorworld.study.results.rows import read_results
 
 F1 = Path(__file__).resolve().parents[1] / "docs" / "results" / "f1_ordering"
@@ -51,14 +51,14 @@ def test_two_parts_merge_back_into_the_committed_bytes_in_either_order(tmp_path,
     seeds = {int(r["seed"]) for r in read_results(F1 / "results.csv")}
     assert len(seeds) >= 2
     first, second = _part(tmp_path, "first", {min(seeds)}), _part(tmp_path, "second", seeds - {min(seeds)})
-    merged = merge_results(first, [second], plan)
+    merged = merge_results(first, [second], plan, study="f1_ordering")
     (results, episodes), added = merged.written, merged.added
     assert results.read_bytes() == (F1 / "results.csv").read_bytes()
     assert added == len(read_results(second / "results.csv")) and merged.dropped == []
     merged, committed = pq.read_table(episodes), pq.read_table(F1 / "episodes.parquet")
     assert merged.select(committed.column_names).equals(committed)
     again = _part(tmp_path, "again", seeds - {min(seeds)})
-    merge_results(again, [_part(tmp_path, "other", {min(seeds)})], plan)
+    merge_results(again, [_part(tmp_path, "other", {min(seeds)})], plan, study="f1_ordering")
     assert (again / "results.csv").read_bytes() == (F1 / "results.csv").read_bytes()
 
 
@@ -108,16 +108,20 @@ def test_a_learning_curve_made_in_parts_merges_back_into_its_committed_bytes(tmp
     lines = (CURVE / "curve.csv").read_text().splitlines(keepends=True)
     results = read_results(CURVE / "results.csv")
     assert len(lines) - 1 >= 3 and len(results) == 1
-    parts = {}
-    for name, keep in [("early", lambda i: i < 2 or i == len(lines) - 2), ("late", lambda i: 2 <= i < len(lines) - 2)]:
-        folder = parts[name] = tmp_path / name
-        folder.mkdir()
-        shutil.copy(CURVE / "config.yaml", folder / "config.yaml")
-        shutil.copy(CURVE / "results.csv", folder / "results.csv")
-        (folder / "curve.csv").write_text(lines[0] + "".join(line for i, line in enumerate(lines[1:]) if keep(i)))
-    merged = merge_results(parts["late"], [parts["early"]], plan)
-    assert merged.added == 0 and parts["late"] / "curve.csv" in merged.written
-    assert (parts["late"] / "curve.csv").read_bytes() == (CURVE / "curve.csv").read_bytes()
+    for first, second in [("late", "early"), ("early", "late")]:
+        parts = {}
+        for name, keep in [
+            ("early", lambda i: i < 2 or i == len(lines) - 2),
+            ("late", lambda i: 2 <= i < len(lines) - 2),
+        ]:
+            folder = parts[name] = tmp_path / f"{first}_first" / name
+            folder.mkdir(parents=True)
+            shutil.copy(CURVE / "config.yaml", folder / "config.yaml")
+            shutil.copy(CURVE / "results.csv", folder / "results.csv")
+            (folder / "curve.csv").write_text(lines[0] + "".join(line for i, line in enumerate(lines[1:]) if keep(i)))
+        merged = merge_results(parts[first], [parts[second]], plan, study="rt1_curve_pick")
+        assert merged.added == 0 and parts[first] / "curve.csv" in merged.written and merged.notes == []
+        assert (parts[first] / "curve.csv").read_bytes() == (CURVE / "curve.csv").read_bytes()
     rows = read_curve(CURVE / "curve.csv")
     assert merge_curve_rows([rows[2:], rows[:2]], plan, ["a", "b"]) == rows
     changed = [{**rows[0], "successes": rows[0]["successes"] + 1}]
@@ -127,24 +131,89 @@ def test_a_learning_curve_made_in_parts_merges_back_into_its_committed_bytes(tmp
         merge_curve_rows([[{**rows[0], "step": "e" * 16}]], plan, ["a"])
 
 
-def test_rows_a_changed_config_no_longer_plans_are_refused_or_dropped_on_request(tmp_path, capsys):
-    """F9 whose config drops RT-1 (as a changed training budget would re-key it): its rows, episodes and curve
-    points are refused by default; ``--drop_unplanned=true`` leaves them out, lists each, and keeps the rest."""
+def _f9_with_a_longer_rt1_budget():
+    """F9's config with RT-1 trained 40 epochs (a checkpoint every 8): RT-1's steps get new keys, the CNN's keep
+    theirs. Returns the config and a map from each RT-1 cell to its new evaluation key."""
     cfg = load_config(F9 / "config.yaml")
-    kept = [m for m in cfg.methods if m.name != "rt1_small"]
-    assert len(kept) == len(cfg.methods) - 1 and cfg.curve_methods()
-    plan = make_plan(replace(cfg, methods=kept, claims=[c for c in cfg.claims if c.method != "rt1_small"]))
-    folder = tmp_path / "f9"
+    methods = [
+        replace(m, train={**m.train, "epochs": 40, "curve_every": 8}) if m.name == "rt1_small" else m
+        for m in cfg.methods
+    ]
+    longer = replace(cfg, methods=methods)
+    keys = {
+        tuple(str(s.meta[c]) for c in CELL): s.key
+        for s in make_plan(longer).evaluations()
+        if s.meta["method"] == "rt1_small"
+    }
+    return longer, keys
+
+
+def test_a_changed_budget_s_old_rows_are_refused_with_the_way_out_or_dropped_on_request(tmp_path, capsys):
+    """F9 with RT-1's budget changed: its committed RT-1 rows are no longer planned, and a new part holds the same
+    cells under new keys. Merging refuses, naming ``--drop_unplanned=true``, and writes nothing; with it the old
+    rows (their episodes and curve points) are left out and listed, the new ones added, and what became of the
+    curve is said."""
+    longer, keys = _f9_with_a_longer_rt1_budget()
+    folder, new = tmp_path / "f9", tmp_path / "new"
     shutil.copytree(F9, folder)
+    new.mkdir()
+    lines = (F9 / "results.csv").read_text().splitlines(keepends=True)
+    step = lines[0].rstrip("\n").split(",").index("step")
+    rt1 = [line for line in lines[1:] if line.split(",")[1] == "rt1_small"]
+    assert len(rt1) == len(keys) > 0
+    renamed = []
+    for line in rt1:
+        values = next(csv.reader([line]))
+        values[step] = keys[tuple(values[lines[0].split(",").index(c)] for c in CELL)]
+        renamed.append(",".join(values) + "\n")
+    (new / "results.csv").write_text(lines[0] + "".join(renamed))
     before = {name: (folder / name).read_bytes() for name in ("results.csv", "episodes.parquet", "curve.csv")}
-    with pytest.raises(ValueError, match="is not in the study's plan: .* --drop_unplanned=true"):
-        merge_results(folder, [], plan)
+    plan = make_plan(longer)
+    with pytest.raises(ValueError, match="comes from two evaluation steps.*--drop_unplanned=true"):
+        merge_results(folder, [new], plan, study=longer.name)
     assert {name: (folder / name).read_bytes() for name in before} == before  # refused: nothing written
-    merged = merge_results(folder, [], plan, drop_unplanned=True)
-    rows = read_results(folder / "results.csv")
-    committed = read_results(F9 / "results.csv")
-    assert {r["method"] for r in rows} == {m.name for m in kept}
-    assert len(merged.dropped) == sum(r["method"] == "rt1_small" for r in committed) > 0 and merged.added == 0
-    assert not (folder / "curve.csv").exists()  # every point was RT-1's
-    episodes = pq.read_table(folder / "episodes.parquet")
-    assert set(episodes["step"].to_pylist()) == {r["step"] for r in rows}
+    merged = merge_results(folder, [new], plan, study=longer.name, drop_unplanned=True)
+    assert len(merged.dropped) == len(rt1) and merged.added == len(rt1)
+    assert {r["step"] for r in read_results(folder / "results.csv")} == (
+        {r["step"] for r in read_results(F9 / "results.csv") if r["method"] != "rt1_small"} | set(keys.values())
+    )
+    assert not (folder / "curve.csv").exists()  # every point was of the old training, and the new part has none
+    assert merged.notes == [
+        f"{new} has no curve.csv: the learning curves of its trainings are not in the merged one",
+        f"removed {folder / 'curve.csv'}: the plan holds none of its points",
+    ]
+    kept = {r["step"] for r in read_results(F9 / "results.csv") if r["method"] != "rt1_small"}
+    assert set(pq.read_table(folder / "episodes.parquet")["step"].to_pylist()) == kept  # old RT-1 episodes gone
+    shutil.copytree(F9, folder, dirs_exist_ok=True)  # again, from the command line with the config's text changed
+    text = (F9 / "config.yaml").read_text()
+    budget = "train: {epochs: 20, batch_size: 16, curve_every: 4}"
+    assert text.count(budget) == 1
+    (tmp_path / "longer.yaml").write_text(text.replace(budget, "train: {epochs: 40, batch_size: 16, curve_every: 8}"))
+    main(
+        [
+            "merge-results",
+            f"--into={folder}",
+            f"--add=[{new}]",
+            f"--config={tmp_path / 'longer.yaml'}",
+            "--drop_unplanned=true",
+        ]
+    )
+    out = capsys.readouterr().out.splitlines()
+    assert sum(line.startswith("dropped ") and "method=rt1_small" in line for line in out) == len(rt1)
+    assert f"removed {folder / 'curve.csv'}: the plan holds none of its points" in out
+    assert out[-1].startswith(f"added {len(rt1)} evaluation(s)")
+
+
+def test_a_wrong_config_is_refused_even_when_dropping_unplanned_rows(tmp_path):
+    """Another study's config (or this study's name on another grid) plans none of a part's rows: refused, with
+    or without ``drop_unplanned``, and nothing is written."""
+    folder = tmp_path / "curve"
+    shutil.copytree(F1.parent / "learning_curve", folder)
+    before = (folder / "results.csv").read_bytes()
+    other = load_config(CURVE / "config.yaml")
+    with pytest.raises(ValueError, match="holds study learning_curve, but the config is of study rt1_curve_pick"):
+        merge_results(folder, [], make_plan(other), study=other.name, drop_unplanned=True)
+    same_name = replace(other, name="learning_curve")
+    with pytest.raises(ValueError, match="the config plans none of the 6 rows of .*: is it this study's config"):
+        merge_results(folder, [], make_plan(same_name), study="learning_curve", drop_unplanned=True)
+    assert (folder / "results.csv").read_bytes() == before

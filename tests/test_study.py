@@ -153,7 +153,7 @@ def test_the_pairs_section_counts_cells_whose_pair_metric_is_undefined():
 
 def test_a_pick_study_report_sets_success_next_to_the_papers_real_robot_table():
     from lerobot_factorworld.family_reports.pick import real_robot_section as _real_robot_section
-    from lerobot_factorworld.study.plan.config import StudyConfig
+    from lerobot_factorworld.study.plan.config import MethodConfig, StudyConfig
     from lerobot_factorworld.study.plan.grid import DEFAULT_WIDTHS
 
     cfg = StudyConfig(
@@ -195,8 +195,6 @@ def test_a_pick_study_report_sets_success_next_to_the_papers_real_robot_table():
     assert _real_robot_section(cfg, door) == []
     # two methods: one table holds both (a second table without its header would render as text), each
     # method's Spearman line under it
-    from lerobot_factorworld.study.plan.config import MethodConfig
-
     two = replace(cfg, methods=[cfg.methods[0], MethodConfig("other", {"type": "bc", "augmentation": "shift"})])
     lines = _real_robot_section(two, rows + [dict(r, method="other") for r in rows])
     table = [i for i, line in enumerate(lines) if line.startswith("|")]

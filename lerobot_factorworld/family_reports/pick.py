@@ -78,7 +78,7 @@ def real_robot_section(cfg: StudyConfig, rows: Sequence[dict]) -> list[str]:
         "| method | condition | paper (real robot) | successes | success rate [95%, seeds pooled: bootstrap] |",
         "|---|---|---|---|---|",
     ]
-    orderings = []  # each method's Spearman line, under the one table of every method
+    orderings: list[str] = []  # each method's Spearman line, under the one table of every method
     for method in cfg.methods:
         rates = {}
         for condition in [TRAIN_SUITE, *cfg.conditions()]:

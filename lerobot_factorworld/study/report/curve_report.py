@@ -22,8 +22,9 @@ CURVE_CAPTION = (
 )
 
 
-def curve_section(rows: Sequence[dict[str, Any]], plotted: bool) -> list[str]:
-    """Markdown lines: the pooled curve as a table (one column per checkpoint), the figure under it."""
+def curve_section(rows: Sequence[dict[str, Any]], plotted: bool, methods: Sequence[str]) -> list[str]:
+    """Markdown lines: the pooled curve as a table (one column per checkpoint), the figure under it, then its
+    differences (``methods``: the config's order, whose first method on a task is the one compared against)."""
     if not rows:
         return []
     pooled = pooled_curve(rows)
@@ -52,20 +53,23 @@ def curve_section(rows: Sequence[dict[str, Any]], plotted: bool) -> list[str]:
     lines += ["", "Each cell: P_T [95% interval] (episodes)."]
     if plotted:
         lines += ["", f"![learning curve]({CURVE_PLOT})", "", f"*{CURVE_CAPTION}*"]
-    return [*lines, *_differences(by_line, epochs), ""]
+    return [*lines, *_differences(by_line, epochs, methods), ""]
 
 
-def _differences(by_line: dict[tuple[str, str], dict[float, dict]], epochs: list[float]) -> list[str]:
+def _differences(
+    by_line: dict[tuple[str, str], dict[float, dict]], epochs: list[float], methods: Sequence[str]
+) -> list[str]:
     """The curve's differences with Newcombe's 95% interval for independent samples, each on its own (not
-    corrected for the others): a description of where the curve moves, not a verdict."""
+    corrected for the others): a description of where the curve moves, not a verdict. A step along a curve is
+    from the curve's own checkpoint before (methods may save at other epochs)."""
     rows = []
     for (method, task), points in by_line.items():
-        rows.append((method, "its checkpoint before", task, [
-            _diff(points.get(e), points.get(previous)) if previous is not None else ""
-            for previous, e in zip([None, *epochs], epochs)
-        ]))  # fmt: skip
+        own = sorted(points)
+        steps = {e: _diff(points[e], points[before]) for before, e in zip(own, own[1:])}
+        rows.append((method, "its checkpoint before", task, [steps.get(e, "") for e in epochs]))
+    order = {name: i for i, name in enumerate(methods)}
     first: dict[str, str] = {}
-    for method, task in by_line:
+    for method, task in sorted(by_line, key=lambda line: order.get(line[0], len(order))):
         first.setdefault(task, method)
     for (method, task), points in by_line.items():
         if method != first[task]:
@@ -78,10 +82,11 @@ def _differences(by_line: dict[tuple[str, str], dict[float, dict]], epochs: list
         "### Differences along the curve and between methods",
         "",
         "Each checkpoint's P_T minus the checkpoint before it on the same curve, and each method's minus the first "
-        "method's at the same epochs on the same task, with Newcombe's 95% interval for two independent samples "
+        "method's (in the config's order) at the same epochs on the same task, with Newcombe's 95% interval for two independent samples "
         "(each on its own, not corrected for the others: a description of where the curve moves, not a verdict). "
-        "The checkpoints play the same episode seeds; where that makes their outcomes positively correlated, a "
-        "paired interval would be narrower.",
+        "Like the table above, an interval holds the episodes' noise only, not the spread between training seeds, "
+        "so between methods it can be too narrow; and the checkpoints play the same episode seeds, so where that "
+        "makes their outcomes positively correlated, a paired interval would be narrower.",
         "",
         "| method | against | task | " + " | ".join(f"{e:g} epochs" for e in epochs) + " |",
         "|---|---|---|" + "---|" * len(epochs),

@@ -273,28 +273,47 @@ def _success_section(cfg: StudyConfig, rows: Sequence[dict]) -> str:
 
 
 def _curve_section(curve: Sequence[dict]) -> str:
-    pooled = pooled_curve(curve)
-    epochs = sorted({p["epochs"] for p in pooled})
-    keys = [f"{e:g}" for e in epochs]
-    series: dict[str, dict[str, Interval]] = {}
-    hover: dict[str, dict[str, str]] = {}
-    for p in pooled:
-        name, key = f"{p['method']} · {p['task']}", f"{p['epochs']:g}"
-        series.setdefault(name, {})[key] = (p["success_rate"], p["ci_low"], p["ci_high"])
-        hover.setdefault(name, {})[key] = (
-            f"{p['epochs']:g} epochs: {p['successes']}/{p['episodes']} = {p['success_rate']:.2f} "
-            f"{ci(p['ci_low'], p['ci_high'], digits=2, sign=False)}"
-        )
-    figure = _interval_figure(
-        "curve-figure", keys, [f"{k} epochs" for k in keys], series, axis="P_T (pooled), 95% interval", hover=hover
-    )
+    """P_T against epochs on a numeric axis (curves of methods saving at other epochs stay to scale), one line
+    per method and task, each point with the *Learning curve* table's Wilson interval as its error bar."""
+    traces = []
+    for j, (method, task) in enumerate(dict.fromkeys((p["method"], p["task"]) for p in pooled_curve(curve))):
+        points = [p for p in pooled_curve(curve) if (p["method"], p["task"]) == (method, task)]
+        rates = [p["success_rate"] for p in points]
+        colour = PALETTE[j % len(PALETTE)]
+        traces.append({
+            "type": "scatter",
+            "mode": "lines+markers",
+            "name": f"{method} · {task}",
+            "x": [p["epochs"] for p in points],
+            "y": rates,
+            "line": {"color": colour, "width": 2},
+            "marker": {"color": colour, "size": 8},
+            "error_y": {
+                "type": "data",
+                "symmetric": False,
+                "array": [p["ci_high"] - r for p, r in zip(points, rates)],
+                "arrayminus": [r - p["ci_low"] for p, r in zip(points, rates)],
+                "color": colour,
+            },
+            "hovertext": [
+                f"{p['epochs']:g} epochs: {p['successes']}/{p['episodes']} = {r:.2f} "
+                f"{ci(p['ci_low'], p['ci_high'], digits=2, sign=False)}"
+                for p, r in zip(points, rates)
+            ],
+            "hoverinfo": "text+name",
+        })  # fmt: skip
+    layout = {
+        "xaxis": {"title": {"text": "training epochs"}, "rangemode": "tozero"},
+        "yaxis": {"title": {"text": "P_T (pooled), 95% interval"}, "range": [-0.05, 1.05]},
+        "legend": {"orientation": "h", "y": 1.02, "yanchor": "bottom"},
+    }
     caption = (
         "P_T (success on the training environments) of each checkpoint the training saved, per method and task, "
         f"pooled over N and seeds, with the Wilson 95% intervals of report.md's <i>Learning curve</i> table "
         f"(<code>{CURVE_FILE}</code>); report.md gives each checkpoint against the one before and each method "
         "against the first."
     )
-    return _figure(figure, caption, escape=False)
+    return _figure(_plotly("curve-figure", traces, layout, 420), caption, escape=False)
 
 
 def _viewer_section(out_dir: Path) -> str:

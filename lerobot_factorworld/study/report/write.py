@@ -81,7 +81,8 @@ def render_report(
     families = families_of(cfg)
     (out_dir / CURVE_PLOT).unlink(missing_ok=True)
     curve = read_curve(out_dir / CURVE_FILE) if cfg.curve_methods() and (out_dir / CURVE_FILE).is_file() else []
-    curve_lines = curve_section(curve, plot_curve(curve, out_dir / CURVE_PLOT)) if curve else []
+    plotted = bool(curve) and plot_curve(curve, out_dir / CURVE_PLOT)
+    curve_lines = curve_section(curve, plotted, [m.name for m in cfg.methods]) if curve else []
 
     def family_sections(part: str) -> list[str]:
         own = curve_lines if part == FAMILY_DETAILS else []  # the learning curve, a breakdown of P_T

@@ -17,7 +17,7 @@ from ..metrics import wilson_interval
 from ..plan.config import StudyConfig
 from ..plan.grid import CURVE_EPOCHS, Plan
 from ..run.inputs import whole_epochs
-from ..run.steps import is_done, read_result, step_folder
+from ..run.steps import Step, is_done, read_result, step_folder
 from .rows import Evaluation, csv_text, policy_of
 
 CURVE_FILE = "curve.csv"
@@ -47,12 +47,8 @@ def curve_rows(cfg: StudyConfig, plan: Plan, study_dir: str | Path) -> list[dict
     if not plan.curve_points():
         return []
     points = [(s, s.meta[CURVE_EPOCHS]) for s in plan.curve_points()]
-    trained = {s.key: s.inputs for s in plan.of_kind("train") if s.inputs.get("curve_every")}  # the curves' trainings
-    points += [
-        (s, whole_epochs(trained[s.deps[0]]["epochs"]))  # the last checkpoint: the training's own epochs
-        for s in plan.evaluations()
-        if s.meta["condition"] == TRAIN_SUITE and s.deps and s.deps[0] in trained
-    ]
+    trained = {s.key: s.inputs for s in plan.of_kind("train")}
+    points += [(s, whole_epochs(trained[s.deps[0]]["epochs"])) for s in last_points(plan)]  # the training's epochs
     rows, trainings = [], {}  # each training's result read once for all its checkpoints
     for step, epochs in points:
         if not is_done(step, study_dir):
@@ -64,6 +60,12 @@ def curve_rows(cfg: StudyConfig, plan: Plan, study_dir: str | Path) -> list[dict
         saved_at = trained.get("curve", {}).get(str(epochs), trained["steps"])
         rows.append(_row(cfg, Evaluation(step, read_result(step, study_dir)), epochs, saved_at))
     return sorted(rows, key=lambda r: ([str(r[c]) for c in CELL], r["epochs"]))
+
+
+def last_points(plan: Plan) -> list[Step]:
+    """Each curve's last point: the grid's own ``train`` evaluation of a training that saves a curve."""
+    curved = {s.key for s in plan.of_kind("train") if s.inputs.get("curve_every")}
+    return [s for s in plan.evaluations() if s.meta["condition"] == TRAIN_SUITE and s.deps and s.deps[0] in curved]
 
 
 def _row(cfg: StudyConfig, evaluation: Evaluation, epochs: float, saved_at: int) -> dict[str, Any]:
