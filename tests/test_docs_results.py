@@ -64,6 +64,7 @@ PUBLISHED = {
     "f6_pretrained": ROOT / "docs" / "findings.md",
     "learning_rt1": ROOT / "docs" / "rt1.md",
     "rt1_curve_pick": ROOT / "docs" / "rt1.md",
+    "rt1_curve_pick_40": ROOT / "docs" / "rt1.md",
 }  # committed studies and a page that must quote them
 
 
