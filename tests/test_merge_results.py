@@ -132,11 +132,13 @@ def test_a_learning_curve_made_in_parts_merges_back_into_its_committed_bytes(tmp
 
 
 def _f9_with_a_longer_rt1_budget():
-    """F9's config with RT-1 trained 40 epochs (a checkpoint every 8): RT-1's steps get new keys, the CNN's keep
-    theirs. Returns the config and a map from each RT-1 cell to its new evaluation key."""
+    """F9's config with RT-1 trained twice its committed epochs (a checkpoint twice as far apart): RT-1's steps
+    get new keys, the CNN's keep theirs. Returns the config and a map from each RT-1 cell to its new evaluation key."""
     cfg = load_config(F9 / "config.yaml")
     methods = [
-        replace(m, train={**m.train, "epochs": 40, "curve_every": 8}) if m.name == "rt1_small" else m
+        replace(m, train={**m.train, "epochs": 2 * m.train["epochs"], "curve_every": 2 * m.train["curve_every"]})
+        if m.name == "rt1_small"
+        else m
         for m in cfg.methods
     ]
     longer = replace(cfg, methods=methods)
@@ -186,9 +188,12 @@ def test_a_changed_budget_s_old_rows_are_refused_with_the_way_out_or_dropped_on_
     assert set(pq.read_table(folder / "episodes.parquet")["step"].to_pylist()) == kept  # old RT-1 episodes gone
     shutil.copytree(F9, folder, dirs_exist_ok=True)  # again, from the command line with the config's text changed
     text = (F9 / "config.yaml").read_text()
-    budget = "train: {epochs: 20, batch_size: 16, curve_every: 4}"
+    doubled_budget = next(m for m in longer.methods if m.name == "rt1_small").train
+    epochs, every = doubled_budget["epochs"] / 2, doubled_budget["curve_every"] / 2
+    budget = f"train: {{epochs: {epochs:g}, batch_size: 16, curve_every: {every:g}}}"
     assert text.count(budget) == 1
-    (tmp_path / "longer.yaml").write_text(text.replace(budget, "train: {epochs: 40, batch_size: 16, curve_every: 8}"))
+    doubled = f"train: {{epochs: {2 * epochs:g}, batch_size: 16, curve_every: {2 * every:g}}}"
+    (tmp_path / "longer.yaml").write_text(text.replace(budget, doubled))
     main(
         [
             "merge-results",
