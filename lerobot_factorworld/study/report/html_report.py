@@ -275,9 +275,11 @@ def _success_section(cfg: StudyConfig, rows: Sequence[dict]) -> str:
 def _curve_section(curve: Sequence[dict]) -> str:
     """P_T against epochs on a numeric axis (curves of methods saving at other epochs stay to scale), one line
     per method and task, each point with the *Learning curve* table's Wilson interval as its error bar."""
+    lines: dict[tuple[str, str], list[dict]] = {}  # pooled once, then grouped per method and task
+    for point in pooled_curve(curve):
+        lines.setdefault((point["method"], point["task"]), []).append(point)
     traces = []
-    for j, (method, task) in enumerate(dict.fromkeys((p["method"], p["task"]) for p in pooled_curve(curve))):
-        points = [p for p in pooled_curve(curve) if (p["method"], p["task"]) == (method, task)]
+    for j, ((method, task), points) in enumerate(lines.items()):
         rates = [p["success_rate"] for p in points]
         colour = PALETTE[j % len(PALETTE)]
         traces.append({
