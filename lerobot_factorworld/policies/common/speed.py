@@ -11,6 +11,8 @@
   convolutions in float32 on CPU (:func:`float32_on_cpu`): in bf16 their backward is several times slower,
   and rt1 ``small`` was slower under ``fast`` than under ``default`` until they did. A CPU without native
   bf16 emulates it and may be slower.
+  On a GPU ``fast`` measured slower than ``default`` (0.86-0.90x for both policies on an H200; docs/rt1.md, "On a
+  GPU"): these models are bound by kernel launches there, and autocast adds casts.
 
 One setting rather than a layout field plus a precision field: the two gains come together, and a layout
 field's default could not describe both policies (rt1's encoder input is already channels-last by default).

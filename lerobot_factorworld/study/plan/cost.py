@@ -58,7 +58,10 @@ ENCODER_FRAME_S = {"lite0": 0.032, "r3m_rn50": 0.086, "clip_rn50": 0.115}
 # for the policy's share; not refitted by --fit_cost.
 LEROBOT_METAWORLD_STEP_S = 0.15
 FEATURE_CACHE_FRAMES = 100_000  # bc's default feature_cache_size (frames whose frozen features are kept)
-GPU_TRAIN_SPEEDUP = 30.0  # one datacentre GPU vs one CPU core for these small image policies (an assumption)
+# One datacentre GPU vs one CPU core for these small image policies' whole training step: an assumption. Their model
+# updates alone measured 156x (bc conv) and 92x (rt1 small) on an H200 against one thread of its host (docs/rt1.md,
+# "On a GPU"); a lerobot-train step also loads its batch on the CPU, which that leaves out, so it bounds this from above.
+GPU_TRAIN_SPEEDUP = 30.0
 DEFAULT_SAMPLE_S = 0.02  # a policy type the fit has not seen
 DEFAULT = "default"  # the episode fraction of a task the fit has not seen
 CLUSTER_SLOTS = 16  # beyond one machine's slots the estimate is the throughput bound, not a simulated schedule
