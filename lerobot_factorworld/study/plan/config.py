@@ -266,10 +266,14 @@ def check_policy(method: MethodConfig) -> None:
         known = ", ".join(sorted(PreTrainedConfig.get_known_choices()))
         raise ValueError(f"method {method.name!r}: unknown policy type {kind!r}; valid types: {known}")
     overrides = {k: v for k, v in method.policy.items() if k != "type"}
+    # On the CPU: without a device LeRobot's config asks torch.cuda.is_available(), and a process that has asked
+    # can no longer fork workers that use CUDA ("Cannot re-initialize CUDA in forked subprocess"). Where the
+    # study trains and evaluates is train.device and eval.device, checked where the steps run.
+    overrides_cpu = {**overrides, "device": "cpu"}
     quiet = logging.getLogger()
     level, quiet.level = quiet.level, logging.ERROR  # constructing a config logs device warnings
     try:
-        draccus.decode(PreTrainedConfig.get_choice_class(kind), overrides)
+        draccus.decode(PreTrainedConfig.get_choice_class(kind), overrides_cpu)
     except Exception as err:  # draccus reports unknown fields and bad values; the innermost cause says why
         while err.__cause__ is not None:
             err = err.__cause__

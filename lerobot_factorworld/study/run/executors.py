@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import concurrent.futures as cf
 import os
+import subprocess
 import sys
 import threading
 from collections.abc import Sequence
@@ -18,7 +19,7 @@ from typing import Any, Protocol
 
 from ...core import provenance
 from ...envs import runtime
-from .steps import RUN, Step, evaluated, run_steps, warm_up
+from .steps import RUN, Step, device_problem, evaluated, run_steps, warm_up
 
 # The module the forkserver imports (by name: importing it here would import everything in this process).
 FORKSERVER_PRELOAD = f"{__package__}.forkserver_preload"
@@ -67,7 +68,8 @@ class LocalExecutor:
     forkserver, a fresh single-threaded process that imports once (:mod:`.forkserver_preload`) and lives as
     long as this process, so later studies in it start their workers at once too."""
 
-    def __init__(self, study_dir: str, workers: int, execution: str = "per_step") -> None:
+    def __init__(self, study_dir: str, workers: int, execution: str = "per_step", steps: Sequence[Step] = ()) -> None:
+        check_local_devices(steps)  # before any worker starts or step runs
         self.study_dir = study_dir
         self.execution = execution
         fork = execution == "grouped" and can_fork()
@@ -160,6 +162,31 @@ def can_fork() -> bool:
     torch = sys.modules.get("torch")
     cuda = torch is not None and torch.cuda.is_initialized()
     return sys.platform == "linux" and threading.active_count() == 1 and not runtime.gl_context_created() and not cuda
+
+
+DEVICE_SETTINGS = {"train": "train.device", "eval": "eval.device"}  # a step kind's device, as the config names it
+# What this machine offers, asked of a child Python: a process that asks CUDA itself cannot fork workers using it.
+DEVICE_PROBE = (
+    "import torch; print(torch.cuda.device_count() if torch.cuda.is_available() else 0, "
+    "int(torch.backends.mps.is_available()))"
+)
+
+
+def check_local_devices(steps: Sequence[Step]) -> None:
+    """Refuse, in one line and before any step runs, a ``train.device`` or ``eval.device`` this machine lacks
+    (each step checks again where it runs: :func:`.steps.require_device`)."""
+    wanted = {
+        (DEVICE_SETTINGS[s.kind], str(s.inputs["device"]))
+        for s in steps
+        if s.kind in DEVICE_SETTINGS and s.inputs.get("device", "cpu") != "cpu"
+    }
+    if not wanted:
+        return
+    probe = subprocess.run([sys.executable, "-c", DEVICE_PROBE], capture_output=True, text=True, check=True)
+    cuda_count, mps = (int(v) for v in probe.stdout.split())
+    problems = [device_problem(setting, device, cuda_count, bool(mps)) for setting, device in sorted(wanted)]
+    if any(problems):
+        raise ValueError("; ".join(p for p in problems if p))
 
 
 def step_resources(step: Step) -> dict[str, float]:
@@ -260,4 +287,4 @@ def make_executor(
     """The executor for ``steps`` (Ray checks them against its cluster before any runs)."""
     if kind == "ray":
         return RayExecutor(study_dir, workers, ray_address, steps, execution)
-    return LocalExecutor(study_dir, workers, execution)
+    return LocalExecutor(study_dir, workers, execution, steps)

@@ -419,6 +419,7 @@ def _run_train(step: Step, folder: Path, deps: list[Path]) -> dict[str, Any]:
     datasets = [read_result(d) for d in deps if d.parent.name == "collect"]  # the task's own first
     data = datasets[0]
     inputs = TrainInputs.from_dict(step.inputs)
+    require_device("train.device", inputs.device)
     policy = step.run.get("policy", inputs.policy)  # absolute paths; the key holds their content hashes
     extra_args = step.run.get("extra_args", list(inputs.extra_args))
     frames = epoch_frames(inputs, [d["frames"] for d in datasets])
@@ -712,7 +713,7 @@ def _load_policy(checkpoint: str, env_cfg, device: str, start_seed: int, cached:
     register_third_party_plugins()  # as lerobot-eval does: Factor World's env and policy types, and any other plugin
     policy_cfg = PreTrainedConfig.from_pretrained(checkpoint)
     policy_cfg.pretrained_path = Path(checkpoint)
-    policy_cfg.device = _eval_device(device)
+    policy_cfg.device = require_device("eval.device", device)
     set_seed(start_seed)
     policy = make_policy(cfg=policy_cfg, env_cfg=env_cfg)
     preprocessor, postprocessor = make_pre_post_processors(
@@ -730,14 +731,28 @@ def _mtime(path: str) -> int:
     return weights.stat().st_mtime_ns if weights.is_file() else 0
 
 
-def _eval_device(device: str) -> str:
-    """``eval.device``, refused when this machine lacks it (rather than silently running elsewhere)."""
-    import torch  # noqa: PLC0415 - deliberately here: only the evaluating process needs torch (seconds to import)
+def device_problem(setting: str, device: str, cuda_count: int, mps: bool) -> str | None:
+    """Why ``device`` (the value of ``setting``: ``train.device`` or ``eval.device``) cannot run on a machine with
+    ``cuda_count`` CUDA devices and MPS or not; ``None`` where it can."""
+    if device.startswith("cuda") and int(device.partition(":")[2] or 0) >= cuda_count:
+        return f"{setting}={device} but this machine has {cuda_count} CUDA device(s); use --{setting}=cpu"
+    if device == "mps" and not mps:
+        return f"{setting}=mps but this machine has no MPS device; use --{setting}=cpu"
+    return None
 
-    if device.startswith("cuda") and not torch.cuda.is_available():
-        raise RuntimeError(f"eval.device={device} but this machine has no CUDA device; use --eval.device=cpu")
-    if device == "mps" and not torch.backends.mps.is_available():
-        raise RuntimeError("eval.device=mps but this machine has no MPS device; use --eval.device=cpu")
+
+def require_device(setting: str, device: str) -> str:
+    """``device``, refused when this process cannot use it, rather than run elsewhere: LeRobot's configs quietly
+    fall back to the CPU. Only a process that runs on the device asks (asking CUDA keeps a process from forking
+    workers that use it)."""
+    if device == "cpu":
+        return device
+    import torch  # noqa: PLC0415 - deliberately here: only a training or evaluating process needs torch (seconds)
+
+    cuda_count = torch.cuda.device_count() if torch.cuda.is_available() else 0
+    problem = device_problem(setting, device, cuda_count, torch.backends.mps.is_available())
+    if problem:
+        raise RuntimeError(problem)
     return device
 
 
