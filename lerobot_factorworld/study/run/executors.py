@@ -166,10 +166,7 @@ def can_fork() -> bool:
 
 DEVICE_SETTINGS = {"train": "train.device", "eval": "eval.device"}  # a step kind's device, as the config names it
 # What this machine offers, asked of a child Python: a process that asks CUDA itself cannot fork workers using it.
-DEVICE_PROBE = (
-    "import torch; print(torch.cuda.device_count() if torch.cuda.is_available() else 0, "
-    "int(torch.backends.mps.is_available()))"
-)
+DEVICE_PROBE = f"from {__package__}.steps import machine_devices; cuda, mps = machine_devices(); print(cuda, int(mps))"
 
 
 def check_local_devices(steps: Sequence[Step]) -> None:
@@ -184,9 +181,11 @@ def check_local_devices(steps: Sequence[Step]) -> None:
         return
     probe = subprocess.run([sys.executable, "-c", DEVICE_PROBE], capture_output=True, text=True, check=True)
     cuda_count, mps = (int(v) for v in probe.stdout.split())
-    problems = [device_problem(setting, device, cuda_count, bool(mps)) for setting, device in sorted(wanted)]
-    if any(problems):
-        raise ValueError("; ".join(p for p in problems if p))
+    problems = [
+        p for setting, device in sorted(wanted) if (p := device_problem(setting, device, cuda_count, bool(mps)))
+    ]
+    if problems:
+        raise ValueError("; ".join(problems))
 
 
 def step_resources(step: Step) -> dict[str, float]:

@@ -741,16 +741,20 @@ def device_problem(setting: str, device: str, cuda_count: int, mps: bool) -> str
     return None
 
 
-def require_device(setting: str, device: str) -> str:
-    """``device``, refused when this process cannot use it, rather than run elsewhere: LeRobot's configs quietly
-    fall back to the CPU. Only a process that runs on the device asks (asking CUDA keeps a process from forking
-    workers that use it)."""
-    if device == "cpu":
-        return device
+def machine_devices() -> tuple[int, bool]:
+    """This machine's CUDA devices and whether it has MPS. Asking CUDA keeps this process from forking workers
+    that use it: only a process that runs on the device, or a child Python, should ask."""
     import torch  # noqa: PLC0415 - deliberately here: only a training or evaluating process needs torch (seconds)
 
-    cuda_count = torch.cuda.device_count() if torch.cuda.is_available() else 0
-    problem = device_problem(setting, device, cuda_count, torch.backends.mps.is_available())
+    return torch.cuda.device_count(), torch.backends.mps.is_available()
+
+
+def require_device(setting: str, device: str) -> str:
+    """``device``, refused when this process cannot use it, rather than run elsewhere: LeRobot's configs quietly
+    fall back to the CPU."""
+    if device == "cpu":
+        return device
+    problem = device_problem(setting, device, *machine_devices())
     if problem:
         raise RuntimeError(problem)
     return device
