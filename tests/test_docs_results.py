@@ -58,6 +58,7 @@ PUBLISHED = {
     "rt1_curve_pick-place": ROOT / "docs" / "rt1.md",
     "rt1_curve_pick-place_80": ROOT / "docs" / "rt1.md",
     "rt1_speed": ROOT / "docs" / "rt1.md",
+    "rt1_curve_pick-place_128": ROOT / "docs" / "rt1.md",
     "learning_curve_bin-picking_500": ROOT / "docs" / "findings.md",
     "learning_curve_n20": ROOT / "docs" / "findings.md",
     "f2_gap_vs_n_pick-place": ROOT / "docs" / "findings.md",
