@@ -3,9 +3,10 @@
 # before it (`reuse_from`: a step with the same key is the same result, docs/study.md). The order makes the most
 # of that: F3's seed-0 datasets, trainings and single-factor evaluations are also F1's, F5's, F6's and F8's, and
 # F1's N = 5 steps are F2's, F4's and F8's. Resumable: run it again and it goes on where it stopped (finished
-# steps are never redone). With each shared step run once, 23.3 hours on 2 cores by the cost model
-# (scripts/findings_cost.py; F1 at five seeds and two arms is 8.3 of them); the findings ran here about 1.3x slower
-# than the model says. One study at a time uses both cores.
+# steps are never redone). With each shared step run once, 41.0 hours on 2 cores by the cost model
+# (scripts/findings_cost.py; F1 at five seeds and two arms is 8.3 of them, F8's RT-1 arms about 15); the bc
+# findings ran here about 1.3x slower than the model says, and a lone RT-1 training about 2x faster (docs/rt1.md,
+# "128 epochs"). One study at a time uses both cores.
 #   bash scripts/run_findings.sh                              # run all, into outputs/study/findings/<config>/
 #   DRY_RUN=1 bash scripts/run_findings.sh                    # each study's --dry-run (steps, cost, power)
 #   ONLY="f3_pairs f1_ordering" bash scripts/run_findings.sh  # some of them, in this script's order
