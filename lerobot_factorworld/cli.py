@@ -452,7 +452,9 @@ def cmd_merge_results(args: list[str]) -> None:
         + (f" and {', '.join(others)}" if others else "")
         + (f" (no {EPISODES_FILE}: not every part has one)" if no_episodes else "")
     )
-    print(f"added {added} evaluation(s); render it with: factorworld report --results={results}")
+    # the folder's own config is refreshed by the report, so a config given here is what the report needs too
+    given = f" --config={cfg.config}" if cfg.config else ""
+    print(f"added {added} evaluation(s); render it with: factorworld report --results={results}{given}")
 
 
 @dataclass

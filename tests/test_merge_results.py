@@ -207,6 +207,13 @@ def test_a_changed_budget_s_old_rows_are_refused_with_the_way_out_or_dropped_on_
     assert sum(line.startswith("dropped ") and "method=rt1_small" in line for line in out) == len(rt1)
     assert f"removed {folder / 'curve.csv'}: the plan holds none of its points" in out
     assert out[-1].startswith(f"added {len(rt1)} evaluation(s)")
+    # the hinted command names the given config: the folder's own config.yaml does not plan the new rows yet
+    hint = out[-1].split("render it with: factorworld ")[1].split()
+    assert hint[-1] == f"--config={tmp_path / 'longer.yaml'}"
+    main(hint[:-1])  # without it the report reads the folder's old config.yaml, which describes the old budget
+    assert doubled not in (folder / "config.yaml").read_text()
+    main(hint)
+    assert doubled in (folder / "config.yaml").read_text()  # and the report leaves the folder's config the new one
 
 
 def test_a_wrong_config_is_refused_even_when_dropping_unplanned_rows(tmp_path):

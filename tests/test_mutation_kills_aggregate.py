@@ -418,6 +418,20 @@ def test_method_gap_differences_set_each_method_against_the_first():
     ]
 
 
+def test_a_method_run_on_part_of_the_grid_is_compared_on_the_cells_both_have():
+    """A method with seed 0 only (a study made in parts) against bc's seed 0, not bc's mean over both seeds;
+    a method on the whole grid beside it keeps the comparison it has alone."""
+    labels = {"light": ["light"]}
+    five = [r for r in BY_N if r["n_train_envs"] == 5]
+    seed0 = [r for r in five if not (r["method"] == "aug" and r["seed"] == 1)]
+    base, gap, diff = aggregate.method_gap_differences(seed0, ["bc", "aug"], labels)[("aug", "light")]
+    assert (base[0], gap[0], diff[0]) == (0.5, 0.25, -0.25)  # bc's seed-0 light gap, not its mean 0.625
+    part = [{**r, "method": "rt1"} for r in seed0 if r["method"] == "aug"]
+    both = aggregate.method_gap_differences([*five, *part], ["bc", "aug", "rt1"], labels)
+    assert both[("aug", "light")] == aggregate.method_gap_differences(five, ["bc", "aug"], labels)[("aug", "light")]
+    assert both[("rt1", "light")][0][0] == 0.5 and both[("rt1", "light")][2][0] == -0.25
+
+
 def test_method_rho_differences_resample_both_methods_together():
     aug = [
         # aug's gaps light, camera_pos, table_texture: seed 0 0.125, 0.5, 0.75 (rho -1), seed 1 0.875, 0.25, 0.125

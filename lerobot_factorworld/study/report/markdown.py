@@ -481,7 +481,8 @@ def _methods_section(cfg: StudyConfig, rows: list[dict]) -> list[str]:
         f"Each method's mean gap next to {base}'s on the same conditions, and the difference (negative: the method "
         f"shrinks the gap), each with its 95% bootstrap interval. Groups of factors are section 5.2's: "
         + "; ".join(f"{name} = {', '.join(group)}" for name, group in PAPER_FACTOR_GROUPS.items())
-        + ". A method with a lower P_T has less gap to lose: read the difference with its success rates below.",
+        + f". A method run on part of {base}'s grid (a study made in parts) is compared on the tasks, N and seeds "
+        "both have. A method with a lower P_T has less gap to lose: read the difference with its success rates below.",
         "",
         f"| method | factors | gap of {base} | gap of the method | difference | 95% interval |",
         "|---|---|---|---|---|---|",

@@ -348,9 +348,32 @@ def method_gap_differences(
     """Every method after the first against the first: per (method, label), the mean gap over the label's
     factors (and tasks, N; then seeds) of the first method, of this one, and their difference (this minus
     the first: negative when this method shrinks the gap), each with its 95% seed-bootstrap interval (main
-    grid; one bootstrap, so all share their replicates)."""
+    grid; one bootstrap, so all share their replicates). A method run on part of the first's grid (a study made
+    in parts) is compared on the (task, N, seed) cells both have, in a bootstrap of its own: the first's mean
+    over cells the method lacks would compare other tasks, not the methods."""
     factors = {f for names in labels.values() for f in names}
     grid = [r for r in main_grid(rows) if r["method"] in methods and r["condition"] in (TRAIN_SUITE, *factors)]
+    trained = {m: {_cell_of(r) for r in grid if r["method"] == m} for m in methods}
+    partial = [m for m in methods[1:] if trained[m] and trained[m] != trained[methods[0]]]
+    out = _gap_differences(
+        [r for r in grid if r["method"] not in partial], [m for m in methods if m not in partial], labels
+    )
+    for method in partial:
+        shared = trained[method] & trained[methods[0]]
+        part = [r for r in grid if r["method"] in (methods[0], method) and _cell_of(r) in shared]
+        out.update(_gap_differences(part, [methods[0], method], labels))
+    return {(m, label): out[(m, label)] for m in methods[1:] for label in labels if (m, label) in out}
+
+
+def _cell_of(row: dict) -> tuple:
+    """The training cell a row belongs to: (task, N, seed, widths)."""
+    return row["task"], row["n_train_envs"], row["seed"], row.get("widths")
+
+
+def _gap_differences(
+    grid: list[dict], methods: Sequence[str], labels: Mapping[str, Sequence[str]]
+) -> dict[tuple[str, str], tuple[Interval, Interval, Interval]]:
+    """:func:`method_gap_differences` on ``grid``, one bootstrap for all of ``methods``."""
     table = cells(grid, gaps=True)
     wanted = [(m, label) for m in methods for label in labels]
     groups = [[i for i, k in enumerate(table.keys) if k[0] == m and k[4] in labels[label]] for m, label in wanted]
