@@ -55,6 +55,8 @@ def test_a_study_against_itself_differs_by_nothing_and_a_large_effect_is_resolve
     assert reverse.difference[0] == pytest.approx(-0.75) and reverse.difference[2] < -0.4  # first minus second
     only_shared = compare_gaps(_study(36, 4), _study(36, 34, seeds=(1, 2, 3)), "light", (PICK_PLACE, PICK_PLACE))
     assert only_shared.seeds == (1, 2)
+    at_n20 = [{**r, "n_train_envs": 20} for r in _study(36, 34)]  # each side is its study's only N: they still pair
+    assert compare_gaps(_study(36, 4), at_n20, "light", (PICK_PLACE, PICK_PLACE)).difference == large.difference
 
 
 def test_bad_input_is_refused_naming_the_choices():

@@ -343,18 +343,19 @@ def ordering_rho_interval(
 
 
 def method_gap_differences(
-    rows: Sequence[dict], methods: Sequence[str], labels: Mapping[str, Sequence[str]]
+    rows: Sequence[dict], methods: Sequence[str], labels: Mapping[str, Sequence[str]], shared_cells_only: bool = True
 ) -> dict[tuple[str, str], tuple[Interval, Interval, Interval]]:
     """Every method after the first against the first: per (method, label), the mean gap over the label's
     factors (and tasks, N; then seeds) of the first method, of this one, and their difference (this minus
     the first: negative when this method shrinks the gap), each with its 95% seed-bootstrap interval (main
     grid; one bootstrap, so all share their replicates). A method run on part of the first's grid (a study made
     in parts) is compared on the (task, N, seed) cells both have, in a bootstrap of its own: the first's mean
-    over cells the method lacks would compare other tasks, not the methods."""
+    over cells the method lacks would compare other tasks, not the methods. ``shared_cells_only=False`` leaves
+    that to the caller (two studies' cells that pair by seed at different N or widths: ``compare.py``)."""
     factors = {f for names in labels.values() for f in names}
     grid = [r for r in main_grid(rows) if r["method"] in methods and r["condition"] in (TRAIN_SUITE, *factors)]
     trained = {m: {_cell_of(r) for r in grid if r["method"] == m} for m in methods}
-    partial = [m for m in methods[1:] if trained[m] and trained[m] != trained[methods[0]]]
+    partial = [m for m in methods[1:] if shared_cells_only and trained[m] and trained[m] != trained[methods[0]]]
     out = _gap_differences(
         [r for r in grid if r["method"] not in partial], [m for m in methods if m not in partial], labels
     )

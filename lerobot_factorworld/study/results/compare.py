@@ -91,7 +91,10 @@ def compare_gaps(
         )
     rows = [{**r, "method": name} for name, side in ((FIRST, a), (SECOND, b)) for r in side if r["seed"] in seeds]
     # the second as the base: the difference is then the first minus the second
-    found = method_gap_differences(rows, [SECOND, FIRST], {factor: [factor]}).get((FIRST, factor))
+    # the sides pair by seed (restricted above); their N and widths may differ between the studies
+    found = method_gap_differences(rows, [SECOND, FIRST], {factor: [factor]}, shared_cells_only=False).get(
+        (FIRST, factor)
+    )
     if found is None:  # a cell whose gap is undefined (no train episodes on the same seeds) is left out
         raise ValueError(f"no defined {factor!r} gap on both sides at the shared seeds {sorted(seeds)}")
     second_gap, first_gap, difference = found
