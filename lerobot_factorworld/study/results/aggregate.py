@@ -580,22 +580,25 @@ def pooled_success(rows: Sequence[dict], keys: Sequence[str]) -> dict[tuple, tup
     The interval accounts for the pooling over training seeds: the 95% seed-bootstrap interval of the
     pooled rate, widened where needed to contain the Wilson interval of the pooled episodes (a percentile
     bootstrap collapses to a point when every episode of every seed succeeds, and with few seeds it
-    understates the spread). With one seed there is no pooling: it is the Wilson interval."""
+    understates the spread). A group with one seed has no pooling: its interval is the Wilson interval, also when
+    other groups have more seeds (a method run at one seed of a study made in parts)."""
     rows = [r for r in rows if r.get("episodes")]
     if not rows:
         return {}
-    names, _, reps, seeds = _pooled_bootstrap(rows, keys)
+    names, _, reps = _pooled_bootstrap(rows, keys)
     lo, hi = percentile_interval(reps)
     totals: dict[tuple, list[int]] = defaultdict(lambda: [0, 0])
+    seeds: dict[tuple, set] = defaultdict(set)
     for r in rows:
         g = tuple(r.get(k) for k in keys)
         totals[g][0] += int(r["successes"])
         totals[g][1] += int(r["episodes"])
+        seeds[g].add(r["seed"])
     out = {}
     for name, low, high in zip(names, lo, hi):
         k, n = totals[name]
         w_lo, w_hi = wilson_interval(k, n)
-        if seeds == 1:
+        if len(seeds[name]) == 1:
             out[name] = (k, n, w_lo, w_hi)
         else:
             out[name] = (k, n, float(np.fmin(low, w_lo)), float(np.fmax(high, w_hi)))
@@ -618,15 +621,15 @@ def pooled_rho_interval(rows: Sequence[dict], key: str, reference: Mapping[str, 
     rows = [r for r in rows if r.get("episodes") and r.get(key) in reference]
     if len({r[key] for r in rows}) < 3:
         return math.nan, math.nan
-    names, _, reps, _ = _pooled_bootstrap(rows, [key])
+    names, _, reps = _pooled_bootstrap(rows, [key])
     rhos = np.array([spearman({name[0]: rate for name, rate in zip(names, rep)}, reference) for rep in reps])
     lo, hi = percentile_interval(rhos)
     return float(lo), float(hi)
 
 
-def _pooled_bootstrap(rows: Sequence[dict], keys: Sequence[str]) -> tuple[list[tuple], np.ndarray, np.ndarray, int]:
+def _pooled_bootstrap(rows: Sequence[dict], keys: Sequence[str]) -> tuple[list[tuple], np.ndarray, np.ndarray]:
     """The success rate pooled over seeds and every column but ``keys``, per group: (groups, point (G,),
-    seed-bootstrap replicates (B, G), number of seeds)."""
+    seed-bootstrap replicates (B, G))."""
     if any(g not in CELL_KEYS for g in keys):
         raise ValueError(f"pooled_success groups by columns of {CELL_KEYS}, got {keys}")
     table = cells(rows)
@@ -644,7 +647,7 @@ def _pooled_bootstrap(rows: Sequence[dict], keys: Sequence[str]) -> tuple[list[t
             return np.add.reduceat(k, starts, axis=-1) / total_n
 
     point, reps = table.bootstrap(statistic)
-    return names, point, reps, len(table.seeds)
+    return names, point, reps
 
 
 def method_rho_differences(
