@@ -430,6 +430,15 @@ def test_a_method_run_on_part_of_the_grid_is_compared_on_the_cells_both_have():
     both = aggregate.method_gap_differences([*five, *part], ["bc", "aug", "rt1"], labels)
     assert both[("aug", "light")] == aggregate.method_gap_differences(five, ["bc", "aug"], labels)[("aug", "light")]
     assert both[("rt1", "light")][0][0] == 0.5 and both[("rt1", "light")][2][0] == -0.25
+    # a cell only the partial method has (seed 5, light gap 1) is not compared: bc has nothing there
+    alone = [{**r, "seed": 5, "success_rate": 0.0 if r["condition"] == "light" else 1.0} for r in part]
+    found = aggregate.method_gap_differences([*five, *part, *alone], ["bc", "rt1"], labels)[("rt1", "light")]
+    assert (found[0][0], found[1][0], found[2][0]) == (0.5, 0.25, -0.25)
+    # a method not asked for adds nothing to the bootstrap, not its seeds nor its cells' episode draws
+    counted = [{**r, "episodes": 4, "successes": round(4 * r["success_rate"])} for r in five]
+    other = [{**r, "method": "other", "seed": 7} for r in counted if r["method"] == "aug"]
+    asked = aggregate.method_gap_differences(counted, ["bc", "aug"], labels)
+    assert aggregate.method_gap_differences([*counted, *other], ["bc", "aug"], labels) == asked
 
 
 def test_method_rho_differences_resample_both_methods_together():

@@ -367,8 +367,8 @@ def method_gap_differences(
 
 
 def _cell_of(row: dict) -> tuple:
-    """The training cell a row belongs to: (task, N, seed, widths)."""
-    return row["task"], row["n_train_envs"], row["seed"], row.get("widths")
+    """The training cell a main-grid row belongs to: (task, N, seed); the main grid has the default widths only."""
+    return row["task"], row["n_train_envs"], row["seed"]
 
 
 def _gap_differences(
