@@ -503,9 +503,8 @@ def test_pooled_success_widens_the_bootstrap_to_the_wilson_interval():
     assert plain(one_seed) == plain(
         {("train",): (4, 4, 1 / (1 + Z95**2 / 4), 1.0), ("light",): (0, 4, 0.0, 1 - 1 / (1 + Z95**2 / 4))}
     )
-    # a group run at one seed beside groups at two (a method of a study made in parts): Wilson's interval, not
-    # the bootstrap over the study's seeds (which would resample seed 1, where it has no episodes)
-    # (and its episodes, whose bootstrap of 1 success in 4 reaches 0, below Wilson's low end)
+    # a group run at one seed beside groups at two (a method of a study made in parts): Wilson's interval, not its
+    # union with the bootstrap over the study's seeds (1 success in 4 bootstraps down to 0, below Wilson's low end)
     part = [*rows, row("train", 0.25, method="rt1", seed=0, episodes=4, successes=1)]
     assert aggregate.pooled_success(part, ["method", "condition"])[("rt1", "train")] == (1, 4, *wilson_interval(1, 4))
     assert aggregate.pooled_success(rows[-2:], ["condition"]) == {}
