@@ -34,6 +34,7 @@ from typing import TYPE_CHECKING
 
 from .contact_sheet import ContactSheetConfig, render_contact_sheet
 from .core.checks import check_at_least, check_folder_target, check_input_file, check_output_file, check_seed
+from .core.errors import is_refusal, write_traceback
 from .core.settings import CONFIG_PATH_FLAG, SettingError, one_line, parse_config
 from .core.splits import check_split
 from .factors.registry import FACTORS, PAPER_STUDY_FACTORS, check_factors, support_matrix_markdown
@@ -48,6 +49,7 @@ if TYPE_CHECKING:  # the study stack imports LeRobot: only where a command needs
 
 SETTING_ERROR_STATUS = 2  # like argparse: the command line was wrong, nothing was done
 FAILURE_STATUS = 1  # the settings were valid but the work was refused or failed
+INTERNAL_ERROR_STATUS = 70  # a bug (sysexits' EX_SOFTWARE): the traceback is in a log file
 
 
 @dataclass
@@ -514,7 +516,8 @@ COMMANDS: dict[str, Callable[[list[str]], None]] = {
 
 
 def main(argv: list[str] | None = None) -> None:
-    """Run one command; a bad setting or a refusal prints one ``error: ...`` line and exits non-zero."""
+    """Run one command; a bad setting or a refusal prints one ``error: ...`` line and exits non-zero; anything
+    else is a bug: one ``internal error:`` line naming the log file that holds its traceback."""
     argv = list(sys.argv[1:] if argv is None else argv)
     if not argv or argv[0] in ("-h", "--help"):
         print(__doc__)
@@ -526,8 +529,16 @@ def main(argv: list[str] | None = None) -> None:
         COMMANDS[command](args)
     except SettingError as err:
         _fail(err, SETTING_ERROR_STATUS)
-    except (ValueError, OSError) as err:  # e.g. a refusal to touch a dataset collected with other settings
-        _fail(err, FAILURE_STATUS)
+    except Exception as err:  # noqa: BLE001  (every exception is answered: a refusal in one line, a bug as one)
+        if is_refusal(err):  # e.g. a refusal to touch a dataset collected with other settings
+            _fail(err, FAILURE_STATUS)
+        log = write_traceback(err, " ".join(argv))
+        print(
+            f"internal error: {type(err).__name__}: {one_line(str(err))} (a bug in lerobot_factorworld, not a "
+            f"problem with your settings; the traceback is in {log}: please report it)",
+            file=sys.stderr,
+        )
+        raise SystemExit(INTERNAL_ERROR_STATUS) from None
 
 
 def _fail(err: BaseException, status: int) -> typing.NoReturn:

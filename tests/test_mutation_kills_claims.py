@@ -322,22 +322,22 @@ PICK_TRAIN = [0.8, 0.85, 0.9, 0.8, 0.85]
 
 
 @pytest.mark.parametrize("wider", [20, 5])
-def test_a_trend_over_n_counts_the_cells_of_its_thinner_end(cfg, wider):
-    """table_pos at N = 5 and 20 on door-open, and on pick-place at N = ``wider`` only: that end has 10 cells, the
-    other 5, and the smallest effect resolved is that of the thinner end's 5 cells per side."""
+def test_a_trend_over_n_compares_only_the_cells_both_ends_have(cfg, wider):
+    """table_pos at N = 5 and 20 on door-open, and on pick-place at N = ``wider`` only: pick-place has no cell at
+    the other end, so the change is door-open's alone (a task at one N would compare tasks, not N), with door-open's
+    5 cells per side and its P_T."""
     small, large = [0.5, 0.4, 0.55, 0.45, 0.5], [0.8, 0.75, 0.9, 0.8, 0.85]
     pick = [0.7, 0.65, 0.8, 0.75, 0.7]
     rows = rows_of({"train": TRAIN, "table_pos": small}, n=5) + rows_of({"train": TRAIN, "table_pos": large}, n=20)
     rows += rows_of({"train": PICK_TRAIN, "table_pos": pick}, task="pick-place", n=wider)
     found, (c,) = decide_one(claim("trend", factors=["table_pos"], over="n", direction="shrinks"), cfg, rows)
-    door = {5: np.subtract(TRAIN, small), 20: np.subtract(TRAIN, large)}  # per seed
-    gap = {**door, wider: (door[wider] + np.subtract(PICK_TRAIN, pick)) / 2}  # the two tasks' mean at ``wider``
-    change = gap[20] - gap[5]  # wider 20: (0.1 + 0.1) / 2 - 0.4 = -0.3 on seed 0; wider 5: 0.1 - (0.4 + 0.1) / 2
-    p = np.mean(small + large + pick)  # three cells of five seeds each, equal episodes
+    change = np.subtract(TRAIN, large) - np.subtract(TRAIN, small)  # per seed: 0.5 - 0.8 = -0.3 on seed 0
+    p = np.mean(small + large)  # two cells of five seeds each, equal episodes
     check(found.comparisons[0], c, label="table_pos over N", threshold=0.0, sign=-1, point=change.mean(),
-          per_seed=change, headroom=gap[5].mean(),
+          per_seed=change, headroom=np.subtract(TRAIN, small).mean(),
           resolvable=lambda e, z: power.difference_resolvable(max(1, round(5 * e)), p, z), verdict=AGREES,
           level=0.95)  # fmt: skip
+    assert found.comparisons[0].cells == 4 * 5  # train and table_pos at both N, five seeds
 
 
 PER_RADIUS = {0.025: [0.8, 0.75, 0.85, 0.8, 0.78], 0.05: [0.6, 0.55, 0.7, 0.6, 0.6], 0.075: [0.4, 0.4, 0.5, 0.35, 0.45]}

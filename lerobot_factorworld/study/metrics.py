@@ -17,8 +17,9 @@ The paper's own numbers, which these are compared with, are in ``paper.py``.
 
 from __future__ import annotations
 
+import hashlib
 import math
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Hashable, Mapping, Sequence
 
 import numpy as np
 
@@ -182,6 +183,8 @@ def seed_bootstrap(
     statistic: Callable[[np.ndarray, np.ndarray], np.ndarray],
     n_boot: int = BOOTSTRAP_RESAMPLES,
     seed: int = BOOTSTRAP_SEED,
+    seed_ids: Sequence[Hashable] | None = None,
+    cell_ids: Sequence[Hashable] | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Point estimate and ``n_boot`` bootstrap replicates of ``statistic``, resampling seeds then episodes.
 
@@ -194,6 +197,12 @@ def seed_bootstrap(
     their counts are in ``results.csv``), which ignores the positive correlation of paired episodes and
     so widens the intervals of gaps.
 
+    With ``seed_ids`` (the training seeds, S) and ``cell_ids`` (what each column is, C), the draws depend on
+    identities, not positions: the seeds are drawn from a generator of ``seed`` and the seeds' values, each
+    column's episodes from one of ``seed`` and its cell's identity. A cell then gets the same replicates in
+    every table that holds it with the same training seeds, whatever the other columns (one interval per
+    cell); without them, one generator draws everything in column order.
+
     ``statistic(rates, episodes)`` maps (B, S, C) arrays to (B, ...); the point estimate is its value on
     the data itself. Returns (point (...), replicates (n_boot, ...)); deterministic for a given ``seed``.
     """
@@ -202,8 +211,10 @@ def seed_bootstrap(
     if rates.shape != episodes.shape or rates.ndim != 2:
         raise ValueError(f"rates and episodes must both be (seeds, cells), got {rates.shape} and {episodes.shape}")
     point = np.asarray(statistic(rates[None], episodes[None]))[0]
-    rng = np.random.default_rng(seed)
     n_seeds = rates.shape[0]
+    if cell_ids is not None:
+        return point, _identified_replicates(rates, episodes, statistic, n_boot, seed, seed_ids, cell_ids)
+    rng = np.random.default_rng(seed)
     out = []
     for start in range(0, n_boot, BOOTSTRAP_CHUNK):
         b = min(BOOTSTRAP_CHUNK, n_boot - start)
@@ -213,6 +224,43 @@ def seed_bootstrap(
         k = rng.binomial(np.where(known, n, 0).astype(np.int64), np.where(known, r, 0.0).clip(0.0, 1.0))
         out.append(np.asarray(statistic(np.where(known, k / np.where(known, n, 1.0), r), n)))
     return point, np.concatenate(out)
+
+
+def identity_seed(identity: Hashable) -> int:
+    """A 64-bit seed from what a thing is (its ``repr``), the same on every machine and Python run (unlike
+    ``hash``)."""
+    return int.from_bytes(hashlib.sha256(repr(identity).encode()).digest()[:8], "little")
+
+
+def _identified_replicates(
+    rates: np.ndarray,
+    episodes: np.ndarray,
+    statistic: Callable[[np.ndarray, np.ndarray], np.ndarray],
+    n_boot: int,
+    seed: int,
+    seed_ids: Sequence[Hashable] | None,
+    cell_ids: Sequence[Hashable],
+) -> np.ndarray:
+    """:func:`seed_bootstrap`'s replicates drawn by identity: the seed draws from (``seed``, the seeds' values),
+    each column's episode draws from (``seed``, its cell's identity)."""
+    n_seeds, n_cells = rates.shape
+    if len(cell_ids) != n_cells or (seed_ids is not None and len(seed_ids) != n_seeds):
+        raise ValueError(f"{len(cell_ids)} cell ids for {n_cells} columns, or seed ids not one per seed")
+    seeds = tuple(range(n_seeds)) if seed_ids is None else tuple(seed_ids)
+    idx = np.random.default_rng([seed, identity_seed(seeds)]).integers(0, n_seeds, size=(n_boot, n_seeds))
+    r, n = rates[idx], episodes[idx]  # (B, S, C)
+    known = (n > 0) & ~np.isnan(r)
+    k = np.zeros(r.shape)
+    for c, cell in enumerate(cell_ids):
+        rng = np.random.default_rng([seed, identity_seed(cell)])
+        k[..., c] = rng.binomial(np.where(known[..., c], n[..., c], 0).astype(np.int64),
+                                 np.where(known[..., c], r[..., c], 0.0).clip(0.0, 1.0))  # fmt: skip
+    resampled = np.where(known, k / np.where(known, n, 1.0), r)
+    out = [
+        np.asarray(statistic(resampled[start : start + BOOTSTRAP_CHUNK], n[start : start + BOOTSTRAP_CHUNK]))
+        for start in range(0, n_boot, BOOTSTRAP_CHUNK)
+    ]
+    return np.concatenate(out)
 
 
 def percentile_interval(

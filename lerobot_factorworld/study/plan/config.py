@@ -512,6 +512,9 @@ class StudyConfig:
         eval: Evaluation settings.
         claims: The paper's claims this study tests (``claim_config.py``): the report decides each from its
             intervals (``claims.py``). None: the paper's factor ordering over ``factors``.
+        finding: The paper's finding this study is one of several studies of (``F2``, ``F8``, ...): its report
+            decides its claims together with those of the other studies of the same finding beside its folder,
+            with one Holm correction for all of them and shared cells decided once. Empty: this study alone.
     """
 
     name: str = "study"
@@ -531,6 +534,7 @@ class StudyConfig:
     train: TrainSettings = field(default_factory=TrainSettings)
     eval: EvalSettings = field(default_factory=EvalSettings)
     claims: list[ClaimConfig] = field(default_factory=list)
+    finding: str = ""
 
     def __post_init__(self) -> None:
         self.methods = [m if isinstance(m, MethodConfig) else MethodConfig(**m) for m in self.methods]
@@ -595,6 +599,8 @@ class StudyConfig:
         self._validate_methods()
         for claim in self.claims:
             claim.validate([m.name for m in self.methods], self.tasks, self.shifted_factors(), self.pair_conditions())
+        if self.finding and not re.fullmatch(r"[A-Za-z0-9_.-]+", self.finding):
+            raise ValueError(f"finding must be a short name such as F8 (letters, digits, _ . -), got {self.finding!r}")
         for factor in self.radius_factors:
             if factor not in RADIUS_FACTORS:
                 raise ValueError(f"the radius sweep applies to {', '.join(RADIUS_FACTORS)}, got {factor!r}")

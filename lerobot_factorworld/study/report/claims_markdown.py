@@ -7,7 +7,7 @@ import math
 from collections.abc import Sequence
 
 from ..metrics import BOOTSTRAP_RESAMPLES
-from ..results.claims import AGREES, CAPPED, DISAGREES, ClaimVerdict, Decided
+from ..results.claims import AGREES, CAPPED, CONFOUNDED, DISAGREES, ClaimVerdict, Decided
 
 CLAIMS_HEADING = "## The paper's claims"
 
@@ -27,23 +27,38 @@ def _interval(d: Decided) -> str:
 
 def to_resolve(d: Decided) -> str:
     """What the comparison's verdict rests on, in words: for an unresolved one, what this design resolves and
-    what would resolve the observed effect."""
+    what would resolve the observed effect (which way, where it leans the other way)."""
+    if d.verdict == CONFOUNDED:
+        why = "the treatment's P_T is at most the baseline's gap" if d.forced else "P_T is resolved lower"
+        return f"the gap shrank, but {why} and P_F is not resolved higher: success fell, generalization did not improve"
     if d.verdict in (AGREES, DISAGREES):
         return "resolved"
     if d.verdict == CAPPED:
+        lean = "; the estimate leans the other way" if d.leans_other_way else ""
         if not math.isfinite(d.smallest):
-            return "these success rates leave no effect this design resolves"
-        return f"at most {d.headroom:.3f} the paper's way, below the {d.smallest:.3f} this design resolves"
+            return "these success rates leave no effect this design resolves" + lean
+        other = (
+            f", and at most {d.contrary:.3f} the other way" if d.leans_other_way and math.isfinite(d.contrary) else ""
+        )
+        return f"at most {d.headroom:.3f} the paper's way{other}, below the {d.smallest:.3f} this design resolves"
     # not resolved: ``smallest`` is NaN only when the episode counts are unknown (claims._verdict)
     parts = [f"resolves {d.smallest:.3f} (episode noise)" if math.isfinite(d.smallest) else "episode counts unknown"]
+    if d.forced:
+        parts.append(
+            "its sign is forced (the treatment's P_T is at most the baseline's gap): it can agree only with P_F "
+            "resolved higher"
+        )
     effect = abs(d.point - d.threshold)
     if not math.isfinite(effect) or effect == 0:
         parts.append("no effect observed")
         return "; ".join(parts)
+    if d.leans_other_way and math.isfinite(d.headroom) and d.headroom < d.smallest:
+        parts.append(f"capped the paper's way (at most {d.headroom:.3f}); leans the other way, toward disagrees")
+    side = " toward disagrees" if d.leans_other_way else ""
     parts.append(
-        f"episode noise: {effect:.3f} at ≥{d.episodes_needed:.0f} episodes per cell"
+        f"episode noise: {effect:.3f}{side} at ≥{d.episodes_needed:.0f} episodes per cell"
         if math.isfinite(d.episodes_needed)
-        else f"episode noise: {effect:.3f} at more episodes than any study runs"
+        else f"episode noise: {effect:.3f}{side} at more episodes than any study runs"
     )
     if d.seeds < 2:
         low, high = d.bootstrap
@@ -57,6 +72,15 @@ def to_resolve(d: Decided) -> str:
     return "; ".join(parts)
 
 
+def _success_changes(d: Decided) -> str:
+    """`` (P_T -0.550 [..], P_F -0.225 [..])``: a shrink's success changes beside its gap change ("" otherwise)."""
+    if d.p_t_change is None or d.p_f_change is None:
+        return ""
+    return " (" + ", ".join(
+        f"{name} {point:+.3f} [{low:+.3f}, {high:+.3f}]" for name, (point, low, high) in (("P_T", d.p_t_change), ("P_F", d.p_f_change))
+    ) + ")"  # fmt: skip
+
+
 def claim_cells(v: ClaimVerdict) -> tuple[str, str, str]:
     """(estimate, interval, what would resolve it) of a claim: its comparison, or an ordering's count and the
     comparison that decides it (the one that disagrees, else the weakest)."""
@@ -64,8 +88,8 @@ def claim_cells(v: ClaimVerdict) -> tuple[str, str, str]:
     if d is None:
         return "no data", "none", "the study has no rows for it"
     if len(v.comparisons) == 1:
-        return _num(d.point), _interval(d), to_resolve(d)
-    if len({c.point for c in v.comparisons}) == 1:  # one statistic against two thresholds: a band
+        return _num(d.point) + _success_changes(d), _interval(d), to_resolve(d)
+    if v.claim.kind == "pair" and v.claim.relation == "within" and len(v.comparisons) == 2:  # a ±band
         low, high = sorted(c.threshold for c in v.comparisons)
         return f"{_num(d.point)} (the paper: between {low:+g} and {high:+g})", _interval(d), to_resolve(d)
     counts = {verdict: sum(c.verdict == verdict for c in v.comparisons) for verdict in (AGREES, DISAGREES)}
@@ -76,29 +100,50 @@ def claim_cells(v: ClaimVerdict) -> tuple[str, str, str]:
     return estimate, _interval(d), to_resolve(d)
 
 
-def claims_section(verdicts: Sequence[ClaimVerdict]) -> list[str]:
-    """The claims table (claim, source, estimate, interval, verdict) and every comparison behind it."""
+def claims_section(verdicts: Sequence[ClaimVerdict], finding: str = "", others: Sequence[str] = ()) -> list[str]:
+    """The claims table (claim, source, estimate, interval, verdict), what its correction covered, and every
+    comparison behind it; ``finding`` and ``others``: the finding and its other studies corrected with these."""
     if not verdicts:
         return []
     comparisons = comparison_rows(verdicts)
+    m = verdicts[0].corrected_over
+    scope = (
+        f"the {m} comparisons of finding {finding} over its studies here and beside this one ({', '.join(others)}), "
+        "a comparison two of them share counted once and decided on their shared cells"
+        if others
+        else f"the {m} comparisons of this study"
+    )
     lines = [
         CLAIMS_HEADING,
         "",
         "Each claim is tested by comparisons (a mean gap against 0, or one factor's or method's gap against another's, "
         "a change over N, a slope over the radius, a pair metric against the ±band), decided at 95% with Holm's "
-        "correction over every comparison of this study: each on the wider of two seed-level intervals, the "
+        f"correction over {scope}: each on the hull of two seed-level intervals, the "
         f"bootstrap's ({BOOTSTRAP_RESAMPLES} resamples) and a t-interval over training seeds (none with one seed, so "
-        "nothing is resolved there). **agrees** / **disagrees**: the interval lies on the paper's / the other side; "
-        "**capped**: the success rates leave less room the paper's way than the design resolves; **not resolved**: "
-        "otherwise. A claim of several comparisons disagrees if one does and agrees only if all do. What would "
-        "resolve it: the episodes per cell at these seeds (episode noise only, a lower bound) and the seeds at the "
-        "observed spread between seeds (`study/results/claims.py`).",
+        "nothing is resolved there). Two methods, or two N, are compared on the cells (task, N, seed, condition) both "
+        "have. **agrees** / **disagrees**: the interval lies on the paper's / the other side; "
+        f"**{CONFOUNDED}**: a gap resolved smaller while the treatment's P_T is resolved lower (or is at most the "
+        "baseline's gap, which forces the sign) and its P_F is not resolved higher, so success fell rather than "
+        "generalization improved (a shrink's estimate shows the P_T and P_F changes, treatment minus baseline, at the "
+        "same level); **capped**: the success rates leave less room the paper's way than the design resolves, and "
+        "the estimate does not lean the other way with room there; **not resolved**: otherwise. A claim of several "
+        "comparisons disagrees if one does and agrees only if all do. What would resolve it: the episodes per cell "
+        "at these seeds (episode noise only, a lower bound) and the seeds at the observed spread between seeds "
+        "(`study/results/claims.py`).",
         "",
         "| " + " | ".join(CLAIM_COLUMNS) + " |",
         "|---|---|---|---|---|---|",
     ]
     for claim, source, estimate, interval, verdict, resolve in claim_rows(verdicts):
         lines.append(f"| {claim} | {source} | {estimate} | {interval} | **{verdict}** | {resolve} |")
+    borrowed = [v for v in verdicts if len(v.studies) > 1]
+    if borrowed:
+        lines.append("")
+        lines += [
+            f"- *{v.claim.text}* is decided on the cells of {', '.join(v.studies)} (the cells they share once), "
+            f"{v.comparisons[0].cells if v.comparisons else 0} cells in all."
+            for v in borrowed
+        ]
     if comparisons:
         lines += ["", "| " + " | ".join(COMPARISON_COLUMNS) + " |", "|---|---|---|---|---|---|"]
         lines += ["| " + " | ".join(row) + " |" for row in comparisons]

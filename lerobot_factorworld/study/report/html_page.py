@@ -49,6 +49,7 @@ td.num { font-variant-numeric: tabular-nums; }
 .verdict.disagrees { background: #f8d9d6; color: #8a1c12; }
 .verdict.not-resolved { background: #eceff3; color: #3b4250; }
 .verdict.capped { background: #fbeccb; color: #7a4d00; }
+.verdict.confounded { background: #f3e0f5; color: #5e1a6b; }
 .viewer-controls { display: flex; flex-wrap: wrap; gap: 10px 18px; align-items: center; margin: 0.6em 0; }
 .viewer-controls label { display: inline-flex; gap: 6px; align-items: center; }
 .pair { display: flex; flex-wrap: wrap; gap: 20px; }

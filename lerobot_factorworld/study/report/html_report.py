@@ -189,10 +189,11 @@ def _claims_section(verdicts: Sequence[ClaimVerdict]) -> str:
     claims = [(*row[:4], _verdict(row[4]), row[5]) for row in claim_rows(verdicts)]
     parts = [
         _p(
-            "Each claim is decided at 95% with Holm's correction over the study's comparisons, on the wider of the "
+            "Each claim is decided at 95% with Holm's correction over its finding's comparisons, on the hull of the "
             "seed-level bootstrap and a t-interval over training seeds: <b>agrees</b> / <b>disagrees</b> when the "
-            "interval lies on the paper's / the other side, <b>capped</b> when the success rates leave less room the "
-            "paper's way than the design resolves, <b>not resolved</b> otherwise (report.md says more).",
+            "interval lies on the paper's / the other side, <b>confounded (P_T fell)</b> when a gap shrank only as "
+            "success fell, <b>capped</b> when the success rates leave less room either way than the design resolves, "
+            "<b>not resolved</b> otherwise (report.md says more).",
             escape=False,
         ),
         _table(CLAIM_COLUMNS, claims, numeric=(2, 3), raw=(4,)),
@@ -430,7 +431,12 @@ def _table(
 
 
 def _verdict(verdict: str) -> str:
-    return f'<span class="verdict {verdict.replace(" ", "-")}">{_e(verdict)}</span>'
+    return f'<span class="verdict {_verdict_class(verdict)}">{_e(verdict)}</span>'
+
+
+def _verdict_class(verdict: str) -> str:
+    """``not resolved`` -> ``not-resolved``; ``confounded (P_T fell)`` -> ``confounded`` (its first word)."""
+    return verdict.split(" (")[0].replace(" ", "-")
 
 
 def _p(text: str, escape: bool = True) -> str:

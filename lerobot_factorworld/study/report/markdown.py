@@ -45,7 +45,7 @@ from ..results.aggregate import (
     summary,
     task_orderings,
 )
-from ..results.claims import ClaimVerdict, decide, study_claims
+from ..results.claims import ClaimVerdict, decide_together, study_claims
 from ..results.rows import RESULTS_FILE, commit_name
 from ..run.inputs import MERGED_FRAMES
 from .claims_markdown import claims_section, ordering_sentence
@@ -76,7 +76,8 @@ BOOTSTRAP_NOTE = (
     f"95% intervals marked *bootstrap* are seed-level bootstraps ({BOOTSTRAP_RESAMPLES} resamples from the fixed "
     f"seed {BOOTSTRAP_SEED}, so a rebuilt report is identical): each resample draws the training seeds with "
     "replacement, then each drawn cell's episodes with replacement (its successes are binomial at its own rate), "
-    "and recomputes the summary; the interval is the 2.5-97.5 percentile. Train and shifted cells are resampled "
+    "each cell from a generator seeded by its identity (method, task, N, widths, condition), so a cell has the same "
+    "interval in every table and report that holds it with the same seeds, and recomputes the summary; the interval is the 2.5-97.5 percentile. Train and shifted cells are resampled "
     "independently (only counts are in the CSV), so gap intervals are somewhat wide; with S seeds a resample can "
     "only take a few distinct seed sets (10 for 3 seeds), so with few seeds they are rough. A percentile interval "
     "of a rank correlation or a count need not contain its point estimate: resampling breaks the point's ties and "
@@ -92,11 +93,13 @@ def render(
     planned: int,
     family_sections: Callable[[str], list[str]] = lambda part: [],
     verdicts: Sequence[ClaimVerdict] | None = None,
+    finding_studies: Sequence[str] = (),
 ) -> str:
     """The text of ``report.md`` from the rows of ``results.csv`` (``planned``: the plan's evaluations);
     ``family_sections(part)`` gives the task families' own sections (``part``: ``FAMILY_RESULTS`` after the
     factor ordering, ``FAMILY_DETAILS`` at the end); ``verdicts``: the claims decided on ``rows``
-    (:func:`decide_claims`; computed here when not given)."""
+    (:func:`decide_claims`; computed here when not given); ``finding_studies``: the other studies of its finding
+    they were corrected with."""
     details = family_sections(FAMILY_DETAILS)
     ev = cfg.eval
     training = _training_text(cfg)
@@ -144,7 +147,7 @@ def render(
         lines += [f"**Coverage:** {len(unequal)} row(s) did not visit their environments equally.", ""]
     verdicts = decide_claims(cfg, rows) if verdicts is None else list(verdicts)
     lines += _ordering_section(cfg, rows, verdicts)
-    lines += claims_section(verdicts)
+    lines += claims_section(verdicts, cfg.finding, finding_studies)
     lines += _ordering_per_task_section(cfg, rows)
     lines += family_sections(FAMILY_RESULTS)
     lines += _gap_table(cfg, rows)
@@ -168,9 +171,15 @@ def render(
     return "\n".join(lines) + "\n" + "\n".join(details)
 
 
-def decide_claims(cfg: StudyConfig, rows: Sequence[dict]) -> list[ClaimVerdict]:
-    """The study's claims decided on ``rows`` (none without rows): what report.md and report.html both print."""
-    return decide(study_claims(cfg), cfg, rows) if rows else []
+def decide_claims(
+    cfg: StudyConfig, rows: Sequence[dict], companions: Sequence[tuple[StudyConfig, Sequence[dict]]] = ()
+) -> list[ClaimVerdict]:
+    """The study's claims decided on ``rows`` (none without rows), corrected together with those of
+    ``companions``, the other studies of its finding: what report.md and report.html both print."""
+    if not rows:
+        return []
+    studies = [(study_claims(cfg), cfg, rows), *((study_claims(c), c, r) for c, r in companions if r)]
+    return decide_together(studies)[0]
 
 
 def commit_line(rows: Sequence[dict]) -> str:

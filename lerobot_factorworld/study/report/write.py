@@ -19,6 +19,8 @@ import shutil
 from collections.abc import Sequence
 from pathlib import Path
 
+import yaml
+
 from ...core.io import atomic_write_text
 from ...core.settings import parse_config
 from ...families import family_of
@@ -61,7 +63,10 @@ def write_report(cfg: StudyConfig, plan: Plan, study_dir: str | Path, command: s
         write_curve(curve_rows(cfg, plan, study_dir), study_dir / CURVE_FILE)
     collect_videos(evaluations, study_dir)  # the recorded episodes, for report.html's paired viewer
     timing = profile_markdown(plan, study_dir)  # last: it is about the run, not the results
-    report, plots = render_report(cfg, read_results(csv_path), study_dir, command, len(plan.evaluations()), timing)
+    report, plots = render_report(
+        cfg, read_results(csv_path), study_dir, command, len(plan.evaluations()), timing,
+        finding_companions(cfg, study_dir),
+    )  # fmt: skip
     return csv_path, report, plots
 
 
@@ -71,13 +76,20 @@ def rebuild_report(cfg: StudyConfig, command: str) -> tuple[Path, Path, list[Pat
 
 
 def render_report(
-    cfg: StudyConfig, rows: list[dict], out_dir: Path, command: str, planned: int, tail: Sequence[str] = ()
+    cfg: StudyConfig,
+    rows: list[dict],
+    out_dir: Path,
+    command: str,
+    planned: int,
+    tail: Sequence[str] = (),
+    companions: Sequence[tuple[StudyConfig, list[dict]]] = (),
 ) -> tuple[Path, list[Path]]:
     """The one renderer: plots, ``report.md`` and ``report.html`` (with its paired-episode viewer of
     ``out_dir/episodes/``) in ``out_dir`` from ``results.csv`` rows and the families' files in ``out_dir``
-    (``tail``: lines after report.md); report.md's and the plots' paths."""
+    (``tail``: lines after report.md; ``companions``: the other studies of its finding, whose claims are
+    corrected with its own: :func:`finding_companions`); report.md's and the plots' paths."""
     plots = write_plots(rows, cfg, out_dir)
-    verdicts = decide_claims(cfg, rows)  # once, for both reports
+    verdicts = decide_claims(cfg, rows, companions)  # once, for both reports
     families = families_of(cfg)
     (out_dir / CURVE_PLOT).unlink(missing_ok=True)
     curve = read_curve(out_dir / CURVE_FILE) if cfg.curve_methods() and (out_dir / CURVE_FILE).is_file() else []
@@ -92,7 +104,8 @@ def render_report(
             for line in family.report_sections(cfg=cfg, rows=rows, study_dir=out_dir, part=part)
         ]
 
-    text = render(cfg, rows, plots, command, planned, family_sections, verdicts)
+    others = [c.name for c, _ in companions]
+    text = render(cfg, rows, plots, command, planned, family_sections, verdicts, others)
     if tail:
         text = text.rstrip("\n") + "\n\n" + "\n".join(tail)
     write_html_report(cfg, rows, out_dir, verdicts, curve)
@@ -144,7 +157,34 @@ def regenerate_report(
                 (out / name).unlink(missing_ok=True)  # a stale copy would be read as this study's
     command = f"factorworld {REPORT_COMMAND} --results={RESULTS_FILE}"
     timing = profile_markdown(plan, out) if (out / STEPS_DIR).is_dir() else []
-    return render_report(cfg, rows, out, command, len(plan.evaluations()), timing or [NO_TIMINGS, ""])
+    companions = finding_companions(cfg, results.parent)
+    return render_report(cfg, rows, out, command, len(plan.evaluations()), timing or [NO_TIMINGS, ""], companions)
+
+
+def finding_companions(cfg: StudyConfig, study_dir: Path) -> list[tuple[StudyConfig, list[dict]]]:
+    """The other studies of ``cfg.finding`` beside ``study_dir``: each sibling folder holding a ``results.csv``
+    and a config (``config.json`` or ``config.yaml``) that names the same finding, with its rows, in folder
+    order. None for a study of no finding. ``docs/results/`` holds a finding's committed studies side by side,
+    and a study's own output folder its siblings of the same ``findings/`` run."""
+    if not cfg.finding or not study_dir.parent.is_dir():
+        return []
+    out = []
+    for folder in sorted(p for p in study_dir.parent.iterdir() if p.is_dir()):
+        if folder.resolve() == study_dir.resolve() or not (folder / RESULTS_FILE).is_file():
+            continue
+        config = next((folder / n for n in (RUN_CONFIG_FILE, PUBLISHED_CONFIG) if (folder / n).is_file()), None)
+        if config is None or _finding_of(config) != cfg.finding:
+            continue
+        other = load_config(config)
+        if other.name != cfg.name:
+            out.append((other, read_results(folder / RESULTS_FILE)))
+    return out
+
+
+def _finding_of(config: Path) -> str:
+    """The ``finding`` a study config names, read without parsing the whole study (most siblings name none)."""
+    settings = yaml.safe_load(config.read_text(encoding="utf-8"))
+    return str(settings.get("finding") or "") if isinstance(settings, dict) else ""
 
 
 def config_next_to(results: Path) -> Path:

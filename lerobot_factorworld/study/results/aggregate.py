@@ -215,7 +215,9 @@ class Cells:
         )
 
     def bootstrap(self, statistic: Callable[[np.ndarray, np.ndarray], np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
-        return seed_bootstrap(self.rates, self.episodes, statistic)
+        """:func:`metrics.seed_bootstrap` drawn by identity (the training seeds, each column's cell key): a cell
+        gets the same replicates in every table and report that holds it with the same seeds."""
+        return seed_bootstrap(self.rates, self.episodes, statistic, seed_ids=self.seeds, cell_ids=self.keys)
 
 
 def cells(rows: Iterable[dict], gaps: bool = False) -> Cells:
@@ -348,10 +350,11 @@ def method_gap_differences(
     """Every method after the first against the first: per (method, label), the mean gap over the label's
     factors (and tasks, N; then seeds) of the first method, of this one, and their difference (this minus
     the first: negative when this method shrinks the gap), each with its 95% seed-bootstrap interval (main
-    grid; one bootstrap, so all share their replicates). A method run on part of the first's grid (a study made
-    in parts) is compared on the (task, N, seed) cells both have, in a bootstrap of its own: the first's mean
-    over cells the method lacks would compare other tasks, not the methods. ``shared_cells_only=False`` leaves
-    that to the caller (two studies' cells that pair by seed at different N or widths: ``compare.py``)."""
+    grid; one bootstrap, so all share their replicates). A method whose cells (task, N, seed, condition) are not
+    the first's (a study made in parts, a condition one method lacks) is compared on the cells both have, in a
+    bootstrap of its own: the first's mean over cells the method lacks would compare other tasks, not the
+    methods. ``shared_cells_only=False`` leaves that to the caller (two studies' cells that pair by seed at
+    different N or widths: ``compare.py``)."""
     factors = {f for names in labels.values() for f in names}
     grid = [r for r in main_grid(rows) if r["method"] in methods and r["condition"] in (TRAIN_SUITE, *factors)]
     trained = {m: {_cell_of(r) for r in grid if r["method"] == m} for m in methods}
@@ -360,15 +363,28 @@ def method_gap_differences(
         [r for r in grid if r["method"] not in partial], [m for m in methods if m not in partial], labels
     )
     for method in partial:
-        shared = trained[method] & trained[methods[0]]
-        part = [r for r in grid if r["method"] in (methods[0], method) and _cell_of(r) in shared]
-        out.update(_gap_differences(part, [methods[0], method], labels))
+        out.update(_gap_differences(shared_cell_rows(grid, [methods[0], method]), [methods[0], method], labels))
     return {(m, label): out[(m, label)] for m in methods[1:] for label in labels if (m, label) in out}
 
 
 def _cell_of(row: dict) -> tuple:
-    """The training cell a main-grid row belongs to: (task, N, seed); the main grid has the default widths only."""
-    return row["task"], row["n_train_envs"], row["seed"]
+    """The cell a main-grid row is, less its method: (task, N, seed, condition); the main grid has the default
+    widths only."""
+    return row["task"], row["n_train_envs"], row["seed"], row["condition"]
+
+
+def shared_cell_rows(rows: Sequence[dict], methods: Sequence[str]) -> list[dict]:
+    """The rows of ``methods`` on the (task, N, seed, condition) cells that every one of them has: what two
+    methods are compared on (none when they share no cell)."""
+    mine = [r for r in rows if r["method"] in methods]
+    have = [{_cell_of(r) for r in mine if r["method"] == m} for m in dict.fromkeys(methods)]
+    both = set.intersection(*have) if have else set()
+    return [r for r in mine if _cell_of(r) in both]
+
+
+def shared_cell_count(rows: Sequence[dict], methods: Sequence[str]) -> int:
+    """How many (task, N, seed, condition) cells ``methods`` share (each method's own cells are one each)."""
+    return len({_cell_of(r) for r in shared_cell_rows(main_grid(rows), methods)})
 
 
 def _gap_differences(
@@ -654,10 +670,16 @@ def method_rho_differences(
     rows: Sequence[dict], methods: Sequence[str], factors: Sequence[str], reference: Mapping[str, float]
 ) -> dict[str, tuple[Interval, Interval]]:
     """Per method after the first: Spearman's rho of its factor ordering with ``reference`` and that rho minus the
-    first method's, each with its 95% seed-bootstrap interval (one bootstrap over both methods, main grid; the
-    factors both methods have). E.g. how much an augmentation moves the ordering toward the paper's."""
+    first method's, each with its 95% seed-bootstrap interval (one bootstrap over the two methods, main grid, on the
+    (task, N, seed, condition) cells both have; the factors both have there). E.g. how much an augmentation moves
+    the ordering toward the paper's."""
     grid = [r for r in main_grid(rows) if r["method"] in methods and r["condition"] in (TRAIN_SUITE, *factors)]
-    table = cells(grid, gaps=True)
+    if len(methods) > 2:  # each method against the first on the cells those two share
+        out = {}
+        for method in methods[1:]:
+            out.update(method_rho_differences(rows, [methods[0], method], factors, reference))
+        return out
+    table = cells(shared_cell_rows(grid, methods), gaps=True)
     shared = [f for f in factors if all(any(k[0] == m and k[4] == f for k in table.keys) for m in methods)]
     if len(methods) < 2 or len(shared) < 3:
         return {}

@@ -37,11 +37,12 @@ from ..metrics import group_mean, nanmean, ols_slope, pair_metric_array, percent
 from ..plan.claim_config import ClaimConfig
 from ..plan.config import StudyConfig
 from ..plan.power import difference_resolvable, mean_resolvable_gap, pair_metric_resolvable, slope_resolvable
-from .aggregate import Cells, cell_gaps, cells, main_grid, radius_rows
+from .aggregate import Cells, cell_gaps, cells, main_grid, radius_rows, shared_cell_rows
 
 ALPHA = 0.05
 AGREES, DISAGREES, NOT_RESOLVED, CAPPED = "agrees", "disagrees", "not resolved", "capped"
-VERDICTS = (AGREES, DISAGREES, NOT_RESOLVED, CAPPED)
+CONFOUNDED = "confounded (P_T fell)"  # a gap resolved smaller, but only because success fell
+VERDICTS = (AGREES, DISAGREES, NOT_RESOLVED, CAPPED, CONFOUNDED)
 MAX_EPISODES = 100_000  # the search for the episodes that would resolve an effect stops here
 
 PAPER_TIERS_STATED = [
@@ -65,6 +66,18 @@ class Comparison:
     sign: int
     headroom: float  # the most the statistic can move from the threshold the paper's way (NaN: unbounded)
     resolvable: Callable[[float, float], float]  # (episodes per cell, z) -> smallest |effect| resolved (power.py)
+    contrary: float = math.nan  # the most it can move from the threshold the other way (NaN: unbounded)
+    success: SuccessChange | None = None  # for a gap that shrinks: the treatment's P_T and P_F minus the baseline's
+
+
+@dataclass(frozen=True)
+class SuccessChange:
+    """What a shrinking gap is made of: the treatment's (the other method's, or the larger N's) success on the
+    training environments (P_T) and under the claim's factors (P_F) minus the baseline's, on the same cells. A gap
+    cannot exceed P_T, so a gap that shrinks while P_T falls may only mean that success fell everywhere."""
+
+    p_t: Statistic
+    p_f: Statistic
 
 
 @dataclass(frozen=True)
@@ -86,6 +99,16 @@ class Decided:
     seeds_needed: float  # seeds at the observed spread that would resolve it (NaN: one seed)
     seeds: int  # training seeds with a value of the statistic
     bootstrap: tuple[float, float]  # the bootstrap's interval alone, at ``level`` (with one seed: episodes only)
+    contrary: float = math.nan  # the most the statistic can move the other way (NaN: unbounded)
+    cells: int = 0  # the cells (method x task x N x seed x condition) it was computed on
+    p_t_change: tuple[float, float, float] | None = None  # a shrink's treatment minus baseline P_T: point, interval
+    p_f_change: tuple[float, float, float] | None = None  # ... and P_F under the claim's factors
+    forced: bool = False  # a shrink whose sign P_T forces: the treatment's P_T is at most the baseline's gap
+
+    @property
+    def leans_other_way(self) -> bool:
+        """The estimate lies on the other side of the threshold from the paper."""
+        return bool(np.isfinite(self.point) and self.sign * (self.point - self.threshold) < 0)
 
 
 @dataclass(frozen=True)
@@ -93,6 +116,8 @@ class ClaimVerdict:
     claim: ClaimConfig
     comparisons: list[Decided]
     verdict: str
+    corrected_over: int = 0  # comparisons in the Holm correction that decided it (its finding's)
+    studies: tuple[str, ...] = ()  # the studies whose cells it was decided on
 
     @property
     def summary(self) -> Decided | None:
@@ -110,12 +135,15 @@ class ClaimVerdict:
 
 
 def _gap_table(rows: Sequence[dict], methods: Sequence[str], conditions: Sequence[str], task: str | None) -> Cells:
+    """The main grid's rows of ``methods`` on ``train`` and ``conditions`` as :class:`Cells`; with several methods,
+    only the cells (task, N, seed, condition) every one of them has: a method merged on part of the grid is
+    compared where both ran, not against the other's mean over tasks or seeds it lacks."""
     grid = [
         r
         for r in main_grid(rows)
         if r["method"] in methods and r["condition"] in (TRAIN_SUITE, *conditions) and task in (None, r["task"])
     ]
-    return cells(grid, gaps=True)
+    return cells(shared_cell_rows(grid, methods) if len(set(methods)) > 1 else grid, gaps=True)
 
 
 def _columns(table: Cells, method: str, conditions: Sequence[str], n: int | None = None) -> list[int]:
@@ -156,26 +184,42 @@ def gap_comparison(label: str, table: Cells, method: str, factors: Sequence[str]
     m = _cells_per_side(table, cols)
     return Comparison(
         label, table, lambda r, n: _mean_gap(table, [cols])(r, n)[..., 0], 0.0, +1, p_train,
-        lambda e, z: mean_resolvable_gap(max(1, round(m * e)), p_train, z),
+        lambda e, z: mean_resolvable_gap(max(1, round(m * e)), p_train, z), contrary=1.0 - p_train,
     )  # fmt: skip
 
 
 def difference_comparison(
     label: str, table: Cells, first: tuple[str, Sequence[str]], second: tuple[str, Sequence[str]], sign: int
 ) -> Comparison | None:
-    """Mean gap of ``first`` (method, factors) minus that of ``second``; the paper's side is ``sign``. The most
-    it can move the paper's way: with ``sign`` +1, ``first``'s P_T minus ``second``'s gap (``first``'s gap
-    cannot grow past its P_T); with -1, ``second``'s gap (``first``'s cannot shrink below 0)."""
+    """Mean gap of ``first`` (method, factors) minus that of ``second``; the paper's side is ``sign``. A gap lies in
+    [P_T - 1, P_T], so the difference lies in [``first``'s P_T - 1 - ``second``'s gap, ``first``'s P_T - ``second``'s
+    gap]: the headroom is the room between 0 and the bound on the paper's side, ``contrary`` the room on the other.
+    (A gap below 0 is rare enough that a shrink's headroom is ``second``'s gap.) With ``sign`` -1 and two methods,
+    the claim is that ``first`` shrinks the gap: its :class:`SuccessChange` goes with it."""
     a, b = _columns(table, *first), _columns(table, *second)
     if not a or not b:
         return None
-    headroom = _pooled(table, _train_of(table, a)) - _gap_of(table, b) if sign > 0 else _gap_of(table, b)
+    p_first, gap_second = _pooled(table, _train_of(table, a)), _gap_of(table, b)
+    top, bottom = p_first - gap_second, gap_second
+    headroom, contrary = (top, bottom + 1.0 - p_first) if sign > 0 else (bottom, top)
     p = _pooled(table, [*a, *b])
     m = min(_cells_per_side(table, a), _cells_per_side(table, b))
+    success = _success_change(table, a, b) if sign < 0 and first[0] != second[0] else None
     return Comparison(
         label, table, lambda r, n: _mean_gap(table, [a, b])(r, n) @ np.array([1.0, -1.0]), 0.0, sign, headroom,
-        lambda e, z: difference_resolvable(max(1, round(m * e)), p, z),
+        lambda e, z: difference_resolvable(max(1, round(m * e)), p, z), contrary, success,
     )  # fmt: skip
+
+
+def _success_change(table: Cells, treatment: list[int], baseline: list[int]) -> SuccessChange:
+    """Treatment minus baseline: P_T over their ``train`` cells, P_F over their shifted ``treatment`` / ``baseline``
+    columns (each the mean over cells per seed, then over seeds, as a gap is)."""
+    t_train, b_train = _train_of(table, treatment), _train_of(table, baseline)
+    difference = np.array([1.0, -1.0])
+    return SuccessChange(
+        p_t=lambda r, n: group_mean(r, [t_train, b_train]) @ difference,
+        p_f=lambda r, n: group_mean(r, [treatment, baseline]) @ difference,
+    )
 
 
 def _gap_of(table: Cells, columns: list[int]) -> float:
@@ -185,9 +229,12 @@ def _gap_of(table: Cells, columns: list[int]) -> float:
 # --- claims -> comparisons ---------------------------------------------------------------------------------------
 
 
-def comparisons(claim: ClaimConfig, cfg: StudyConfig, rows: Sequence[dict]) -> list[Comparison]:
-    """The comparisons that test ``claim`` on ``rows`` (those without data are left out)."""
-    method = claim.method or cfg.methods[0].name
+def comparisons(
+    claim: ClaimConfig, cfg: StudyConfig, rows: Sequence[dict], method: str | None = None
+) -> list[Comparison]:
+    """The comparisons that test ``claim`` on ``rows`` (those without data are left out); ``method``: the claim's,
+    else the study's first."""
+    method = method or claim.method or cfg.methods[0].name
     kind = claim.kind
     found: list[Comparison | None] = []
     if kind == "gap_opens":
@@ -220,18 +267,21 @@ def _trend_comparison(claim: ClaimConfig, method: str, rows: Sequence[dict]) -> 
     sign = -1 if claim.direction == "shrinks" else +1
     label = f"{' + '.join(claim.factors)} over {'N' if claim.over == 'n' else 'the radius'}"
     if claim.over == "n":
-        table = _gap_table(rows, [method], claim.factors, claim.task)
+        table = _gap_table(
+            _shared_across_n(rows, method, claim.factors, claim.task), [method], claim.factors, claim.task
+        )
         ns = sorted({k[2] for k in table.keys if k[4] in claim.factors and k[0] == method})
         if len(ns) < 2:
             return None
         first, last = _columns(table, method, claim.factors, ns[0]), _columns(table, method, claim.factors, ns[-1])
         statistic = lambda r, n: _mean_gap(table, [last, first])(r, n) @ np.array([1.0, -1.0])  # noqa: E731
-        start = _gap_of(table, first)
-        headroom = start if sign < 0 else _pooled(table, _train_of(table, last)) - start
+        start, p_last = _gap_of(table, first), _pooled(table, _train_of(table, last))
+        headroom, contrary = (start, p_last - start) if sign < 0 else (p_last - start, start + 1.0 - p_last)
         p = _pooled(table, [*first, *last])
         m = min(_cells_per_side(table, first), _cells_per_side(table, last))
+        success = _success_change(table, last, first) if sign < 0 else None
         return Comparison(label, table, statistic, 0.0, sign, headroom,
-                          lambda e, z: difference_resolvable(max(1, round(m * e)), p, z))  # fmt: skip
+                          lambda e, z: difference_resolvable(max(1, round(m * e)), p, z), contrary, success)  # fmt: skip
     swept = [r for r in radius_rows(rows, claim.factors) if r["method"] == method and claim.task in (None, r["task"])]
     runs = {(r["task"], r["n_train_envs"], r["widths"]) for r in swept}
     trains = [
@@ -256,12 +306,31 @@ def _trend_comparison(claim: ClaimConfig, method: str, rows: Sequence[dict]) -> 
     widest, narrowest = groups[-1], groups[0]
     start = _gap_of(table, narrowest)
     span = (len(radii) - 1) or 1
-    headroom = (start if sign < 0 else _pooled(table, _train_of(table, widest)) - start) / span
+    p_widest = _pooled(table, _train_of(table, widest))
+    headroom = (start if sign < 0 else p_widest - start) / span
+    contrary = (p_widest - start if sign < 0 else start) / span
     p = _pooled(table, widest)
     m = min(_cells_per_side(table, g) for g in groups)
     step = radii[1] - radii[0]
     return Comparison(label + " (per radius step)", table, statistic, 0.0, sign, headroom,
-                      lambda e, z: slope_resolvable(max(1, round(m * e)), radii, p, z) * step)  # fmt: skip
+                      lambda e, z: slope_resolvable(max(1, round(m * e)), radii, p, z) * step, contrary)  # fmt: skip
+
+
+def _shared_across_n(rows: Sequence[dict], method: str, factors: Sequence[str], task: str | None) -> list[dict]:
+    """``method``'s main-grid rows (of ``task``, on ``train`` and ``factors``) at the smallest and largest N where
+    a factor ran, on the (task, seed, condition) cells both N have: a change over N compares the same tasks and
+    seeds."""
+    grid = [
+        r
+        for r in main_grid(rows)
+        if r["method"] == method and r["condition"] in (TRAIN_SUITE, *factors) and task in (None, r["task"])
+    ]
+    ns = sorted({r["n_train_envs"] for r in grid if r["condition"] in factors})
+    if len(ns) < 2:
+        return []
+    at = {n: {(r["task"], r["seed"], r["condition"]) for r in grid if r["n_train_envs"] == n} for n in (ns[0], ns[-1])}
+    both = at[ns[0]] & at[ns[-1]]
+    return [r for r in grid if r["n_train_envs"] in (ns[0], ns[-1]) and (r["task"], r["seed"], r["condition"]) in both]
 
 
 def _matched_columns(table: Cells, method: str, conditions: Sequence[str]) -> list[list[int]] | None:
@@ -359,7 +428,9 @@ def decision_interval(reps: np.ndarray, per_seed: np.ndarray, level: float) -> t
 
 def _verdict(c: Comparison, low: float, high: float, smallest: float, *, counts_known: bool) -> str:
     """``smallest`` is NaN both when the success rates leave nothing to resolve (capped) and when the episode
-    counts are unknown (``counts_known`` false: no power, so an unresolved comparison stays not resolved)."""
+    counts are unknown (``counts_known`` false: no power, so an unresolved comparison stays not resolved).
+    Headroom is judged on both sides: a comparison capped the paper's way whose estimate leans the other way,
+    where this design could resolve that side, is not resolved (it may yet disagree), not capped."""
     if np.isfinite(low) and np.isfinite(high):
         above, below = low > c.threshold, high < c.threshold
         if above or below:
@@ -369,6 +440,12 @@ def _verdict(c: Comparison, low: float, high: float, smallest: float, *, counts_
     if np.isfinite(c.headroom) and (c.headroom <= 0 or c.headroom < smallest):
         return CAPPED  # no room the paper's way, or less than the design resolves
     return NOT_RESOLVED
+
+
+def _uncapped_the_other_way(c: Comparison, point: float, smallest: float) -> bool:
+    """A capped comparison whose estimate lies the other way, with room there that this design resolves."""
+    leans = np.isfinite(point) and c.sign * (point - c.threshold) < 0
+    return bool(leans and np.isfinite(smallest) and not (np.isfinite(c.contrary) and c.contrary < smallest))
 
 
 def _episodes_needed(c: Comparison, effect: float, z: float) -> float:
@@ -397,53 +474,163 @@ def _seeds_needed(per_seed: np.ndarray, effect: float, level: float) -> float:
     return math.nan
 
 
+def _change(table: Cells, statistic: Statistic, level: float) -> tuple[float, float, float]:
+    """A success change with its interval at ``level``: the decision interval (bootstrap and t, hulled), or with
+    one seed the bootstrap's alone (episodes only)."""
+    ev = _evidence(Comparison("", table, statistic, 0.0, +1, math.nan, lambda e, z: math.nan))
+    low, high = decision_interval(ev.reps, ev.per_seed, level)
+    if not (np.isfinite(low) and np.isfinite(high)):
+        low, high = (float(x) for x in percentile_interval(ev.reps, level=level))
+    return ev.point, float(low), float(high)
+
+
+def _confounded(verdict: str, forced: bool, p_t: tuple[float, float, float], p_f: tuple[float, float, float],
+                seeds: int) -> bool:  # fmt: skip
+    """A shrink that agrees on its gap, but whose treatment's P_T is resolved below the baseline's (or is at most
+    the baseline's gap, which forces the sign), agrees only if its P_F is resolved above the baseline's: else the
+    gap shrank because success fell, not because the policy generalizes better. Resolved means at the comparison's
+    level on seed-level intervals (with one seed nothing is, and the gap is not resolved either)."""
+    if verdict != AGREES:
+        return False
+    fell = seeds >= 2 and p_t[2] < 0
+    improved = seeds >= 2 and p_f[1] > 0
+    return (fell or forced) and not improved
+
+
+@dataclass(frozen=True)
+class _Part:
+    """One study's claims and rows, decided together with the other studies of its finding."""
+
+    claims: Sequence[ClaimConfig]
+    cfg: StudyConfig
+    rows: Sequence[dict]
+
+
+def _cell_label(row: dict) -> tuple:
+    return tuple(row.get(k) for k in ("method", "task", "n_train_envs", "seed", "widths", "condition"))
+
+
+def _claim_groups(parts: Sequence[_Part]) -> dict[tuple[int, int], tuple[int, list[dict], tuple[str, ...]]]:
+    """(part, claim) -> (group, rows, studies). A group is one (method, baseline, task) in the studies that share a
+    cell of it (the same evaluation step), so a comparison two studies share is decided once, on the union of
+    their cells (the first study's row where both have a cell of the same label)."""
+    claims = []  # (part, claim, (method, baseline, task), its rows, their evaluation steps)
+    for i, part in enumerate(parts):
+        default = part.cfg.methods[0].name
+        for j, claim in enumerate(part.claims):
+            who = (claim.method or default, claim.baseline, claim.task)
+            mine = [r for r in part.rows if r["method"] in who[:2]]
+            claims.append((i, j, who, mine, {r["step"] for r in mine if r.get("step")}))
+    group = list(range(len(claims)))  # union-find over claims: same who, and the same study or a shared step
+
+    def root(x: int) -> int:
+        while group[x] != x:
+            x = group[x]
+        return x
+
+    for x, (i, _, who, _, steps) in enumerate(claims):
+        for y, (k, _, other, _, other_steps) in enumerate(claims[:x]):
+            if other == who and (i == k or steps & other_steps):
+                group[root(x)] = root(y)
+    out = {}
+    for x, (i, j, *_) in enumerate(claims):
+        members = [c for y, c in enumerate(claims) if root(y) == root(x)]
+        seen: set = set()
+        rows = []
+        for member in sorted(members, key=lambda c: c[0]):  # studies in order: the first's row of a label wins
+            for row in member[3]:
+                if _cell_label(row) not in seen:
+                    seen.add(_cell_label(row))
+                    rows.append(row)
+        studies = tuple(dict.fromkeys(parts[c[0]].cfg.name for c in sorted(members, key=lambda c: c[0])))
+        out[(i, j)] = (root(x), rows, studies)
+    return out
+
+
 def decide(claims: Sequence[ClaimConfig], cfg: StudyConfig, rows: Sequence[dict]) -> list[ClaimVerdict]:
-    """Every claim's verdict, the comparisons of all of them corrected together (Holm). A comparison two claims
-    share (the same factors, method and task: e.g. both readings of the ordering) is one test, counted once."""
-    default = cfg.methods[0].name
-    per_claim = [
-        [((c.label, claim.method or default, claim.baseline, claim.task), c) for c in comparisons(claim, cfg, rows)]
-        for claim in claims
-    ]
-    unique = {key: c for found in per_claim for key, c in found}
+    """Every claim's verdict, the comparisons of all of them corrected together (Holm): one study, one finding."""
+    return decide_together([(claims, cfg, rows)])[0]
+
+
+def decide_together(
+    studies: Sequence[tuple[Sequence[ClaimConfig], StudyConfig, Sequence[dict]]],
+) -> list[list[ClaimVerdict]]:
+    """The claims of several studies of one finding, corrected once: Holm over every comparison of all of them.
+    A comparison two claims share (the same statistic of the same method, baseline and task: both readings of the
+    ordering, or one claim in two studies that share its cells) is one test, counted once and decided on the
+    union of its studies' cells. Per study, its claims' verdicts in order."""
+    parts = [_Part(list(c), cfg, list(r)) for c, cfg, r in studies]
+    groups = _claim_groups(parts)
+    per_claim: dict[tuple[int, int], list[tuple]] = {}
+    unique: dict[tuple, Comparison] = {}
+    for (i, j), (group, rows, _) in groups.items():
+        claim = parts[i].claims[j]
+        method = claim.method or parts[i].cfg.methods[0].name
+        found = [((group, c.label), c) for c in comparisons(claim, parts[i].cfg, rows, method)]
+        per_claim[(i, j)] = [key for key, _ in found]
+        for key, c in found:
+            unique.setdefault(key, c)
     keys = list(unique)
     evidence = {key: _evidence(unique[key]) for key in keys}
-    order = sorted(keys, key=lambda key: (evidence[key].p_value, evidence[key].p_bootstrap, key[0]))
+    order = sorted(keys, key=lambda key: (evidence[key].p_value, evidence[key].p_bootstrap, key[1], key[0]))
     decided: dict[tuple, Decided] = {}
     stopped = False
     for rank, key in enumerate(order):
         c, ev = unique[key], evidence[key]
         level = 1 - ALPHA / (len(order) - rank)
-        low, high = decision_interval(ev.reps, ev.per_seed, level)
-        z = float(stats.norm.ppf(1 - (1 - level) / 2))
-        episodes = _episodes(c.table)
-        smallest = c.resolvable(episodes, z) if np.isfinite(episodes) else math.nan  # counts unknown: no power
-        verdict = _verdict(c, low, high, smallest, counts_known=bool(np.isfinite(episodes)))
-        if stopped and verdict in (AGREES, DISAGREES):
-            verdict = NOT_RESOLVED  # Holm: nothing after the first comparison left unresolved is resolved
-        if verdict not in (AGREES, DISAGREES):
-            stopped = True
-        effect = abs(ev.point - c.threshold)
-        decided[key] = Decided(
-            c.label, c.threshold, c.sign, ev.point, low, high, level, ev.p_value, verdict, c.headroom, smallest,
-            _episodes_needed(c, effect, z), _seeds_needed(ev.per_seed, effect, level), len(ev.per_seed),
-            tuple(float(x) for x in percentile_interval(ev.reps, level=level)),
-        )  # fmt: skip
-    out = []
-    for claim, found in zip(claims, per_claim):
-        mine = [decided[key] for key, _ in found]
-        out.append(ClaimVerdict(claim, mine, combine([d.verdict for d in mine])))
+        decided[key], resolved = _decide_one(c, ev, level, stopped)
+        stopped = stopped or not resolved
+    out: list[list[ClaimVerdict]] = []
+    for i, part in enumerate(parts):
+        mine = []
+        for j, claim in enumerate(part.claims):
+            found = [decided[key] for key in per_claim[(i, j)]]
+            mine.append(ClaimVerdict(claim, found, combine([d.verdict for d in found]), len(order), groups[(i, j)][2]))
+        out.append(mine)
     return out
 
 
+def _decide_one(c: Comparison, ev: _Evidence, level: float, stopped: bool) -> tuple[Decided, bool]:
+    """One comparison at its Holm level: its :class:`Decided` and whether its null was rejected (the gap resolved
+    either way; a confounded shrink's gap did shrink, so Holm goes on)."""
+    low, high = decision_interval(ev.reps, ev.per_seed, level)
+    z = float(stats.norm.ppf(1 - (1 - level) / 2))
+    episodes = _episodes(c.table)
+    smallest = c.resolvable(episodes, z) if np.isfinite(episodes) else math.nan  # counts unknown: no power
+    verdict = _verdict(c, low, high, smallest, counts_known=bool(np.isfinite(episodes)))
+    if verdict == CAPPED and _uncapped_the_other_way(c, ev.point, smallest):
+        verdict = NOT_RESOLVED  # it cannot agree, but it may yet disagree
+    if stopped and verdict in (AGREES, DISAGREES):
+        verdict = NOT_RESOLVED  # Holm: nothing after the first comparison left unresolved is resolved
+    resolved = verdict in (AGREES, DISAGREES)
+    p_t = p_f = None
+    forced = False
+    if c.success is not None:
+        p_t, p_f = _change(c.table, c.success.p_t, level), _change(c.table, c.success.p_f, level)
+        forced = bool(np.isfinite(c.contrary) and c.contrary <= 0)
+        if _confounded(verdict, forced, p_t, p_f, len(ev.per_seed)):
+            verdict = CONFOUNDED
+    effect = abs(ev.point - c.threshold)
+    decided = Decided(
+        c.label, c.threshold, c.sign, ev.point, low, high, level, ev.p_value, verdict, c.headroom, smallest,
+        _episodes_needed(c, effect, z), _seeds_needed(ev.per_seed, effect, level), len(ev.per_seed),
+        tuple(float(x) for x in percentile_interval(ev.reps, level=level)), c.contrary,
+        int(np.sum(~np.isnan(c.table.rates))), p_t, p_f, forced,
+    )  # fmt: skip
+    return decided, resolved
+
+
 def combine(verdicts: Sequence[str]) -> str:
-    """A claim of several comparisons: disagrees if one does, agrees if all do, capped if all the rest are."""
+    """A claim of several comparisons: disagrees if one does, agrees if all do, confounded if the rest agree but
+    one shrank only as success fell, capped if all the rest are."""
     if not verdicts:
         return NOT_RESOLVED
     if DISAGREES in verdicts:
         return DISAGREES
     if all(v == AGREES for v in verdicts):
         return AGREES
+    if all(v in (AGREES, CONFOUNDED) for v in verdicts):
+        return CONFOUNDED
     if all(v in (AGREES, CAPPED) for v in verdicts):
         return CAPPED
     return NOT_RESOLVED
