@@ -314,8 +314,8 @@ def test_render_report_writes_report_html_and_decides_the_claims_once(monkeypatc
     from lerobot_factorworld.study.report.write import render_report
 
     calls = []
-    decide = markdown.decide
-    monkeypatch.setattr(markdown, "decide", lambda *a: calls.append(1) or decide(*a))
+    decide = markdown.decide_together
+    monkeypatch.setattr(markdown, "decide_together", lambda *a: calls.append(1) or decide(*a))
     monkeypatch.setattr("lerobot_factorworld.study.report.write.write_plots", lambda rows, cfg, out: [])
     cfg, rows = synthetic_study()
     report, _ = render_report(cfg, rows, tmp_path, "test", len(rows))

@@ -76,9 +76,10 @@ def _success_changes(d: Decided) -> str:
     """`` (P_T -0.550 [..], P_F -0.225 [..])``: a shrink's success changes beside its gap change ("" otherwise)."""
     if d.p_t_change is None or d.p_f_change is None:
         return ""
-    return " (" + ", ".join(
+    changes = ", ".join(
         f"{name} {point:+.3f} [{low:+.3f}, {high:+.3f}]" for name, (point, low, high) in (("P_T", d.p_t_change), ("P_F", d.p_f_change))
-    ) + ")"  # fmt: skip
+    )  # fmt: skip
+    return f" ({changes}{'; episodes only' if d.seeds < 2 else ''}; {d.cells} cells)"
 
 
 def claim_cells(v: ClaimVerdict) -> tuple[str, str, str]:
@@ -136,6 +137,13 @@ def claims_section(verdicts: Sequence[ClaimVerdict], finding: str = "", others: 
     ]
     for claim, source, estimate, interval, verdict, resolve in claim_rows(verdicts):
         lines.append(f"| {claim} | {source} | {estimate} | {interval} | **{verdict}** | {resolve} |")
+    studies = ", ".join(dict.fromkeys([*(s for v in verdicts for s in v.studies[:1]), *others]))
+    lines += [
+        "",
+        "| correction | comparisons | studies |",
+        "|---|---|---|",
+        f"| Holm over {'finding ' + finding if others else 'this study'} | {m} | {studies} |",
+    ]
     borrowed = [v for v in verdicts if len(v.studies) > 1]
     if borrowed:
         lines.append("")

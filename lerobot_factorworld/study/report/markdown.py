@@ -32,6 +32,7 @@ from ..results.aggregate import (
     gap_against_n,
     gap_per_factor_and_n,
     gap_per_radius,
+    main_grid,
     method_gap_differences,
     method_rho_differences,
     pair_bands,
@@ -443,8 +444,30 @@ def _gap_table(cfg: StudyConfig, rows: list[dict]) -> list[str]:
                 lines.append(
                     f"| {method.name} | {condition} | " + " | ".join(pm(*c[:2]) if c else "n/a" for c in cells) + " |"
                 )
-    lines.append("")
+    lines += ["", *_partial_methods_note(cfg, rows)]
     return lines
+
+
+def _partial_methods_note(cfg: StudyConfig, rows: list[dict]) -> list[str]:
+    """A line for the averaged tables when a method ran on part of the first method's (task, N, seed) cells: its
+    averages are over its own cells, so its row and the first's average different tasks or seeds; the comparisons
+    (*Methods against*, the claims) use the cells both have."""
+    first = cfg.methods[0].name
+    cells_of = {m.name: {(r["task"], r["n_train_envs"], r["seed"]) for r in main_grid(rows) if r["method"] == m.name}
+                for m in cfg.methods}  # fmt: skip
+    partial = [
+        f"{m} on {len(own & cells_of[first])} of {first}'s {len(cells_of[first])} (task, N, seed) cells"
+        for m, own in cells_of.items()
+        if m != first and own and own != cells_of[first]
+    ]
+    if not partial:
+        return []
+    return [
+        f"Methods run on part of the grid: {'; '.join(partial)}. Their rows average their own cells, so a row of "
+        f"theirs and {first}'s average different tasks or seeds; *Methods against {first}* and the claims compare "
+        "them on the cells (task, N, seed, condition) both have.",
+        "",
+    ]
 
 
 def _gap_against_n_section(cfg: StudyConfig, rows: list[dict]) -> list[str]:
@@ -670,7 +693,7 @@ def _success_table(cfg: StudyConfig, rows: list[dict]) -> list[str]:
                     )
                     + " |"
                 )
-    lines.append("")
+    lines += ["", *_partial_methods_note(cfg, rows)]
     return lines
 
 
