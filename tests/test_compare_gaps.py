@@ -56,7 +56,11 @@ def test_a_study_against_itself_differs_by_nothing_and_a_large_effect_is_resolve
     only_shared = compare_gaps(_study(36, 4), _study(36, 34, seeds=(1, 2, 3)), "light", (PICK_PLACE, PICK_PLACE))
     assert only_shared.seeds == (1, 2)
     at_n20 = [{**r, "n_train_envs": 20} for r in _study(36, 34)]  # each side is its study's only N: they still pair
-    assert compare_gaps(_study(36, 4), at_n20, "light", (PICK_PLACE, PICK_PLACE)).difference == large.difference
+    # they pair by seed as before; each cell's episode draws come from its identity, N included, so the interval
+    # moves by bootstrap noise only
+    at_20 = compare_gaps(_study(36, 4), at_n20, "light", (PICK_PLACE, PICK_PLACE))
+    assert at_20.seeds == large.seeds and at_20.difference[0] == large.difference[0]
+    assert at_20.difference[1:] == pytest.approx(large.difference[1:], abs=0.02)
 
 
 def test_bad_input_is_refused_naming_the_choices():
@@ -73,9 +77,9 @@ def test_bad_input_is_refused_naming_the_choices():
 # The commands docs/findings.md quotes (first folder, second folder, extra flags), with what each prints last.
 QUOTED = [
     ("f7_object_texture_168px", "f1_ordering", ["--factor=object_texture"], "+0.092 [-0.067, +0.250]"),
-    ("f7_object_texture_colours", "f7_object_texture_images", ["--factor=object_texture"], "+0.075 [-0.200, +0.325]"),
+    ("f7_object_texture_colours", "f7_object_texture_images", ["--factor=object_texture"], "+0.075 [-0.217, +0.333]"),
     ("f8_out_of_domain_language", "f8_out_of_domain", ["--factor=floor_texture", "--method=bc_lang",
-     "--second_method=bc"], "+0.175 [-0.101, +0.450]"),
+     "--second_method=bc"], "+0.175 [-0.100, +0.450]"),
 ]  # fmt: skip
 
 
