@@ -35,8 +35,9 @@ from .curve_report import CURVE_PLOT, curve_section, plot_curve
 from .episode_videos import MANIFEST, collect_videos
 from .family_report import FamilyReport, report_of
 from .html_report import write_html_report
-from .markdown import FAMILY_DETAILS, REPORT_FILE, decide_claims, render
+from .markdown import FAMILY_DETAILS, REPORT_FILE, _stages_section, decide_claims, render
 from .plots import write_plots
+from .stopping_report import render_auto
 
 PUBLISHED_CONFIG = "config.yaml"  # the study's config, committed next to its results.csv (docs/results/<study>/)
 REPORT_COMMAND = "report"  # factorworld report
@@ -76,6 +77,11 @@ def render_report(
     """The one renderer: plots, ``report.md`` and ``report.html`` (with its paired-episode viewer of
     ``out_dir/episodes/``) in ``out_dir`` from ``results.csv`` rows and the families' files in ``out_dir``
     (``tail``: lines after report.md); report.md's and the plots' paths."""
+    if cfg.eval.auto:  # intervals valid under the stopping only: none of the fixed-n sections, plots or page
+        text = render_auto(cfg, rows, command, planned, _stages_section(cfg, rows))
+        if tail:
+            text = text.rstrip("\n") + "\n\n" + "\n".join(tail)
+        return atomic_write_text(out_dir / REPORT_FILE, text), []
     plots = write_plots(rows, cfg, out_dir)
     verdicts = decide_claims(cfg, rows)  # once, for both reports
     families = families_of(cfg)
