@@ -83,3 +83,68 @@ def test_an_auto_profile_stops_each_condition_keeps_every_episode_and_says_why(f
     assert all(is_done(step, out) for step in plan.steps)
     again = run_study(profile.study(), profile.options(), "factorworld profile ...")
     assert again.ran["eval"] == 0
+
+    # results where the Hub shows them: one entry per task and condition, the documented fields
+    import yaml
+
+    from lerobot_factorworld import __version__
+    from lerobot_factorworld.study.results.eval_results import ENTRY_FIELDS
+
+    entries = yaml.safe_load((out / ".eval_results" / "factorworld.yaml").read_text())
+    assert [e["dataset"]["task_id"] for e in entries] == [
+        "pick-place/train",
+        "pick-place/light",
+        "pick-place/table_texture",
+    ]
+    for entry in entries:
+        assert tuple(entry) == ENTRY_FIELDS and set(entry["dataset"]) == {"id", "task_id"}
+        assert entry["value"] == 0.0 and isinstance(entry["value"], float)  # success in percent
+        assert "8 episodes" in entry["notes"] and "anytime-valid 95% interval" in entry["notes"]
+        assert f"lerobot_factorworld {__version__}" in entry["notes"]
+    assert "stopped: within tolerance" in entries[1]["notes"]
+    card = yaml.safe_load((out / "eval.yaml").read_text())
+    assert {t["id"] for t in card["tasks"]} == {e["dataset"]["task_id"] for e in entries}
+    import datasets
+
+    loaded = datasets.load_dataset("parquet", data_files=str(out / "episodes.parquet"), split="train")
+    assert loaded.num_rows == len(episodes) and "success" in loaded.column_names
+
+
+def test_push_opens_a_pull_request_on_the_model_repo_and_offline_loses_nothing(tmp_path, monkeypatch):
+    """The pull request's files and ``create_pr`` through a stand-in for the Hub client; then the real path with
+    ``HF_HUB_OFFLINE=1`` (read when huggingface_hub is imported: a new process): one line, files unchanged."""
+    import subprocess
+    import sys
+
+    import huggingface_hub
+
+    from lerobot_factorworld.study.results import eval_results
+
+    (tmp_path / ".eval_results").mkdir()
+    (tmp_path / ".eval_results" / "factorworld.yaml").write_text("- value: 1.0\n")
+    (tmp_path / "episodes.parquet").write_bytes(b"PAR1")
+    calls = []
+
+    class Api:
+        def create_commit(self, repo_id, operations, commit_message, create_pr):
+            calls.append((repo_id, sorted(o.path_in_repo for o in operations), create_pr))
+            return type("Commit", (), {"pr_url": f"https://huggingface.co/{repo_id}/discussions/1"})()
+
+    monkeypatch.setattr(huggingface_hub, "HfApi", Api)
+    monkeypatch.setattr(eval_results, "check_hub_reachable", lambda: None)
+    opened, line = eval_results.open_model_pr(tmp_path, "someone/bc")
+    assert opened and calls == [
+        ("someone/bc", [".eval_results/factorworld.yaml", "factorworld/episodes.parquet"], True)
+    ]
+    assert line.endswith("/discussions/1")
+
+    code = (
+        "from lerobot_factorworld.study.results.eval_results import open_model_pr\n"
+        f"print(*open_model_pr({str(tmp_path)!r}, 'someone/bc'), sep='\\n')\n"
+    )
+    env = {**__import__("os").environ, "HF_HUB_OFFLINE": "1", "HF_TOKEN": "hf_not_a_token"}
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env, timeout=120)
+    assert proc.returncode == 0 and "Traceback" not in proc.stderr, proc.stderr[-2000:]
+    opened, line = proc.stdout.strip().splitlines()[-2:]
+    assert opened == "False" and line.startswith("warning: no pull request opened on someone/bc: could not reach")
+    assert "nothing was lost" in line and (tmp_path / "episodes.parquet").read_bytes() == b"PAR1"

@@ -29,6 +29,7 @@ from .plan.profile import profile_text, record_run
 from .plan.stale import check_not_stale, rerun_stale, stale_steps, warn_stale
 from .report.write import write_report
 from .results.episodes import push_results
+from .results.eval_results import open_model_pr
 from .run.blocks import group_id, is_sequential
 from .run.checkpoint import check_checkpoints, fetch_checkpoints
 from .run.executors import make_executor, task_units
@@ -131,8 +132,14 @@ def _push(options: RunOptions, outcome: StudyOutcome) -> bool:
             file=sys.stderr,
         )
         return False
-    pushed, line = push_results(outcome.study_dir, options.hub_repo_id)
-    print(line, file=sys.stdout if pushed else sys.stderr, flush=True)
+    pushed = True
+    if options.hub_repo_id:
+        pushed, line = push_results(outcome.study_dir, options.hub_repo_id)
+        print(line, file=sys.stdout if pushed else sys.stderr, flush=True)
+    if options.model_repo_id:
+        opened, line = open_model_pr(outcome.study_dir, options.model_repo_id)
+        print(line, file=sys.stdout if opened else sys.stderr, flush=True)
+        pushed = pushed and opened
     return pushed
 
 

@@ -28,6 +28,7 @@ from ..plan.grid import Plan, make_plan
 from ..plan.profile import profile_markdown
 from ..results.curve import CURVE_FILE, curve_rows, read_curve, write_curve
 from ..results.episodes import EPISODES_FILE, episode_rows, write_episodes
+from ..results.eval_results import write_eval_results
 from ..results.rows import RESULTS_FILE, finished_evaluations, read_results, result_rows, write_results
 from ..run.recording import VIDEOS_DIR
 from ..run.steps import STEPS_DIR
@@ -77,6 +78,8 @@ def render_report(
     """The one renderer: plots, ``report.md`` and ``report.html`` (with its paired-episode viewer of
     ``out_dir/episodes/``) in ``out_dir`` from ``results.csv`` rows and the families' files in ``out_dir``
     (``tail``: lines after report.md); report.md's and the plots' paths."""
+    if not cfg.trained_methods():  # a profile of given checkpoints: its results for their model pages
+        write_eval_results(cfg, rows, out_dir)
     if cfg.eval.auto:  # intervals valid under the stopping only: none of the fixed-n sections, plots or page
         text = render_auto(cfg, rows, command, planned, _stages_section(cfg, rows))
         if tail:
