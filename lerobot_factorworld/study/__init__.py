@@ -1,6 +1,8 @@
 """The generalization-gap study (``factorworld study``), as its pipeline, bottom-up (each subpackage imports only
 from those listed before it; the layer contract in pyproject.toml checks it):
 
+- ``confseq``: anytime-valid confidence sequences for bounded means (the hedged betting construction);
+- ``sequential``: the stopping rule of ``eval.episodes=auto`` built on them;
 - ``metrics``, ``paper``: pure statistics (Wilson and Newcombe intervals, the pair metric, Spearman) and the
   paper's reference numbers;
 - ``run``: one step (collect, ``lerobot-train``, LeRobot's evaluation), cached by its key, and the executors;

@@ -29,6 +29,8 @@ from .plan.profile import profile_text, record_run
 from .plan.stale import check_not_stale, rerun_stale, stale_steps, warn_stale
 from .report.write import write_report
 from .results.episodes import push_results
+from .results.eval_results import open_model_pr
+from .run.blocks import group_id, is_sequential
 from .run.checkpoint import check_checkpoints, fetch_checkpoints
 from .run.executors import make_executor, task_units
 from .run.options import RunOptions
@@ -130,8 +132,14 @@ def _push(options: RunOptions, outcome: StudyOutcome) -> bool:
             file=sys.stderr,
         )
         return False
-    pushed, line = push_results(outcome.study_dir, options.hub_repo_id)
-    print(line, file=sys.stdout if pushed else sys.stderr, flush=True)
+    pushed = True
+    if options.hub_repo_id:
+        pushed, line = push_results(outcome.study_dir, options.hub_repo_id)
+        print(line, file=sys.stdout if pushed else sys.stderr, flush=True)
+    if options.model_repo_id:
+        opened, line = open_model_pr(outcome.study_dir, options.model_repo_id)
+        print(line, file=sys.stdout if opened else sys.stderr, flush=True)
+        pushed = pushed and opened
     return pushed
 
 
@@ -165,7 +173,7 @@ def _execute(plan: Plan, study_dir: Path, options: RunOptions) -> StudyOutcome:
             ready = [s for s in pending if all(d in done for d in s.deps)]
             ready.sort(key=lambda s: -KINDS.index(s.kind))  # finish cells before starting new ones: early results
             free = max(0, options.workers - len(running))
-            for unit in task_units(ready, free, grouped=options.execution == "grouped")[:free]:
+            for unit in _units(ready, free, grouped=options.execution == "grouped")[:free]:
                 for step in unit:
                     pending.remove(step)
                 running[executor.submit(unit)] = unit
@@ -193,6 +201,17 @@ def _execute(plan: Plan, study_dir: Path, options: RunOptions) -> StudyOutcome:
         for bar in bars.values():
             bar.close()
     return outcome
+
+
+def _units(ready: list[Step], free: int, grouped: bool) -> list[list[Step]]:
+    """The worker tasks for ``ready``: an ``eval.episodes=auto`` group is one task (its stopping couples its
+    conditions: ``run/blocks.py``), the other steps as ``task_units`` makes them."""
+    groups: dict[str, list[Step]] = {}
+    for step in ready:
+        if is_sequential(step):
+            groups.setdefault(group_id(step), []).append(step)
+    rest = [s for s in ready if not is_sequential(s)]
+    return [*groups.values(), *(task_units(rest, free - len(groups), grouped) if rest else [])]
 
 
 def _blocked(pending: list[Step], failed: set[str]) -> list[Step]:

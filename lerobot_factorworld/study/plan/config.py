@@ -34,6 +34,7 @@ from ...scene.cameras import DEFAULT_CAMERAS_SETTING, DEFAULT_IMAGE_SIZE
 from ...tasks import get_task
 from ..run.checkpoint import checkpoint_setting
 from ..run.inputs import EPOCHS_OVER, OWN_FRAMES, whole_epochs
+from ..sequential import AUTO, StopRule
 from .claim_config import ClaimConfig
 
 ALL_PAIRS = "all"
@@ -458,10 +459,13 @@ class EvalSettings:
         record_episodes: Episodes per condition and checkpoint whose frames are kept as videos (the first ones:
             episode i of every condition starts the object at the same place), for report.html's paired
             viewer; 0: none. Not in the key (frames change no result): a step cached without videos keeps none.
+        block, max_episodes, tolerance, confidence: With ``episodes: auto`` (``study/sequential.py``): paired
+            episodes per block (default ``n_test_envs``), the budget per condition, the gap band a condition may
+            stop inside, and the simultaneous level of the anytime-valid intervals. In the keys only with ``auto``.
     """
 
     n_test_envs: int = 10
-    episodes: int = 20
+    episodes: int | str = 20
     start_seed: int = 1000
     max_episode_steps: int | None = None
     max_episode_steps_per_task: dict[str, int] = field(default_factory=dict)
@@ -469,15 +473,35 @@ class EvalSettings:
     batch_size: int = 1
     threads: int = 1
     record_episodes: int = 3
+    block: int | None = None
+    max_episodes: int = 200
+    tolerance: float = 0.1
+    confidence: float = 0.95
 
     def __post_init__(self) -> None:
         check_at_least("eval.record_episodes", self.record_episodes, 0)
+        if self.episodes != AUTO and (isinstance(self.episodes, bool) or not isinstance(self.episodes, int)):
+            raise ValueError(f"eval.episodes must be a whole number or {AUTO}, got {self.episodes!r}")
         self.max_episode_steps_per_task = per_task_setting(
             "eval.max_episode_steps_per_task", self.max_episode_steps_per_task
         )
 
     def max_steps_for(self, task: str) -> int | None:
         return self.max_episode_steps_per_task.get(get_task(task).name, self.max_episode_steps)
+
+    @property
+    def auto(self) -> bool:
+        """Episodes in blocks until each condition is decided (``episodes: auto``)."""
+        return self.episodes == AUTO
+
+    @property
+    def budget(self) -> int:
+        """Episodes a condition may take at most: ``episodes``, or ``max_episodes`` with ``auto``."""
+        return self.max_episodes if self.auto else int(self.episodes)
+
+    def stop_rule(self) -> StopRule:
+        """The rule of ``auto`` (its settings checked)."""
+        return StopRule(self.block or self.n_test_envs, self.max_episodes, self.tolerance, self.confidence)
 
 
 RUN_CONFIG_FILE = "config.json"  # the settings a study ran with, written into its folder by every run
@@ -741,24 +765,28 @@ class StudyConfig:
 
     def _validate_episodes(self) -> None:
         ev = self.eval
-        if ev.episodes < 1 or ev.n_test_envs < 1 or ev.batch_size < 1:
+        if ev.auto:
+            self._validate_auto()
+        per = f"eval.block={ev.stop_rule().block}" if ev.auto else f"eval.episodes={ev.episodes}"
+        if (not ev.auto and ev.episodes < 1) or ev.n_test_envs < 1 or ev.batch_size < 1:
             raise ValueError("eval.episodes, eval.n_test_envs and eval.batch_size must be at least 1")
+        count = ev.stop_rule().block if ev.auto else ev.episodes
         for n in self.n_train_envs:
             if ev.n_test_envs % n:
                 raise ValueError(
                     f"eval.n_test_envs={ev.n_test_envs} must be a multiple of every N (got N={n}), so that each "
                     "test environment is paired with the training environment the same episode sees"
                 )
-            if ev.episodes % n:
-                raise ValueError(f"eval.episodes={ev.episodes} must be a multiple of every N (got N={n})")
+            if count % n:
+                raise ValueError(f"{per} must be a multiple of every N (got N={n})")
         for task, limit in ev.max_episode_steps_per_task.items():  # known tasks (per_task_setting)
             if int(limit) < 1:
                 raise ValueError(f"eval.max_episode_steps_per_task[{task}] must be at least 1, got {limit}")
         if ev.max_episode_steps is not None and ev.max_episode_steps < 1:
             raise ValueError(f"eval.max_episode_steps must be at least 1, got {ev.max_episode_steps}")
-        if ev.episodes % ev.n_test_envs:
+        if count % ev.n_test_envs:
             raise ValueError(
-                f"eval.episodes={ev.episodes} must be a multiple of eval.n_test_envs={ev.n_test_envs}, so that every "
+                f"{per} must be a multiple of eval.n_test_envs={ev.n_test_envs}, so that every "
                 "test environment is visited equally"
             )
         for task in self.tasks if self.trained_methods() else ():  # demos are collected for training only
@@ -766,3 +794,20 @@ class StudyConfig:
                 raise ValueError(
                     f"{task}: {self.collect.demos_for(task)} demos cannot cover N={max(self.n_train_envs)} environments"
                 )
+
+    def _validate_auto(self) -> None:
+        """``eval.episodes=auto`` stops each checkpoint's evaluation on its own anytime-valid intervals: refused
+        where the study's claims rest on fixed-n intervals that such a stopping makes invalid."""
+        self.eval.stop_rule()  # block, budget, tolerance and level: "must be a positive multiple of ..."
+        why = (
+            "eval.episodes=auto stops each checkpoint's evaluation on its own anytime-valid intervals, which "
+            "leaves {what} without a valid interval: give eval.episodes a number"
+        )
+        if len(self.seeds) > 1:
+            raise ValueError(why.format(what=f"the claims over seeds {self.seeds} (fixed-n seed-level bootstraps)"))
+        if self.claims:
+            raise ValueError(why.format(what="the config's claims (decided on fixed-n bootstrap intervals)"))
+        if self.curve_methods():
+            raise ValueError(why.format(what="the learning curve (fixed-n intervals per checkpoint)"))
+        if not self.conditions():
+            raise ValueError("eval.episodes=auto stops shifted conditions once decided: list at least one factor")

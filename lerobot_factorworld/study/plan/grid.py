@@ -14,6 +14,7 @@ from ...core.fingerprint import file_fingerprint
 from ...datasets.version import DATA_VERSION
 from ...factors.registry import get_factor
 from ...protocol.conditions import TRAIN_SUITE
+from ..run.blocks import with_stop_rule
 from ..run.checkpoint import GIVEN_CHECKPOINT, keyed_checkpoint
 from ..run.inputs import OWN_FRAMES, CollectInputs, EnvInputs, EvalInputs, TrainInputs
 from ..run.recording import RECORD_SETTING
@@ -102,11 +103,17 @@ def _method_steps(
         settings = cfg.train_for(method)
         train = _train_step(settings, method.policy, seed, collect, labels, extras, epochs_over)
         curve = [_curve_step(cfg, epochs, train, collect, labels) for epochs in settings.curve_epochs()]
-        return [*extras, train, *(_eval_step(cfg, c, train, collect, labels) for c in conditions), *curve]
+        evals = [_eval_step(cfg, c, train, collect, labels) for c in conditions]
+        return [*extras, train, *_stopped(cfg, evals), *curve]
     if seed != cfg.seeds[0]:
         return []
     env = CollectInputs.from_dict(collect.inputs).environments(method.obs)
-    return [_given_eval_step(cfg, c, method.checkpoint, keyed, env, labels) for c in conditions]
+    return _stopped(cfg, [_given_eval_step(cfg, c, method.checkpoint, keyed, env, labels) for c in conditions])
+
+
+def _stopped(cfg: StudyConfig, evals: list[Step]) -> list[Step]:
+    """A checkpoint's evaluations, as one group under the stopping rule with ``eval.episodes=auto``."""
+    return with_stop_rule(evals, cfg.eval.stop_rule()) if cfg.eval.auto else evals
 
 
 def _collect_step(cfg: StudyConfig, task: str, n: int, seed: int, widths: dict[str, str], cell: dict) -> Step:
@@ -200,7 +207,7 @@ def _eval_inputs(cfg: StudyConfig, condition: str, task: str) -> EvalInputs:
     ev = cfg.eval
     return EvalInputs(
         condition=condition,
-        episodes=ev.episodes,
+        episodes=ev.budget,
         start_seed=ev.start_seed,
         max_episode_steps=ev.max_steps_for(task),
         device=ev.device,

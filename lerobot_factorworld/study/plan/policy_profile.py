@@ -84,6 +84,8 @@ class ProfileConfig:
         dry_run: Print the plan and its cost, run nothing.
         push_to_hub: Push ``episodes.parquet`` and ``results.csv`` with a card to ``hub_repo_id`` afterwards.
         hub_repo_id: ``user/name`` of that dataset repo.
+        model_repo_id: ``user/name`` of the checkpoint's model repo: with ``push_to_hub``, a pull request adds
+            ``.eval_results/factorworld.yaml`` and the per-episode Parquet to it.
     """
 
     policy: ProfilePolicy = field(default_factory=ProfilePolicy)
@@ -104,6 +106,7 @@ class ProfileConfig:
     dry_run: bool = False
     push_to_hub: bool = False
     hub_repo_id: str | None = None
+    model_repo_id: str | None = None
 
     def __post_init__(self) -> None:
         if not self.policy.path:
@@ -158,7 +161,11 @@ class ProfileConfig:
     def options(self) -> RunOptions:
         """How the profile's study runs (what its command line says)."""
         return RunOptions(
-            workers=self.workers, dry_run=self.dry_run, push_to_hub=self.push_to_hub, hub_repo_id=self.hub_repo_id
+            workers=self.workers,
+            dry_run=self.dry_run,
+            push_to_hub=self.push_to_hub,
+            hub_repo_id=self.hub_repo_id,
+            model_repo_id=self.model_repo_id,
         )
 
 

@@ -101,7 +101,7 @@ def _fmt(value: float) -> str:
 
 def power_lines(cfg: StudyConfig, planned: Sequence[float] = PLANNED_P) -> list[str]:
     """The ``--dry-run`` lines: smallest resolvable gap per cell and per summary, at each planned P_T."""
-    n, seeds, tasks, ns = cfg.eval.episodes, len(cfg.seeds), len(cfg.tasks), len(cfg.n_train_envs)
+    n, seeds, tasks, ns = cfg.eval.budget, len(cfg.seeds), len(cfg.tasks), len(cfg.n_train_envs)
     m_factor, m_n = tasks * ns * seeds, tasks * seeds
     header = "".join(f"  P={p:<5g}" for p in planned)
     lines = [

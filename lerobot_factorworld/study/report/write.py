@@ -30,6 +30,7 @@ from ..plan.grid import Plan, make_plan
 from ..plan.profile import profile_markdown
 from ..results.curve import CURVE_FILE, curve_rows, read_curve, write_curve
 from ..results.episodes import EPISODES_FILE, episode_rows, write_episodes
+from ..results.eval_results import write_eval_results
 from ..results.rows import RESULTS_FILE, finished_evaluations, read_results, result_rows, write_results
 from ..run.recording import VIDEOS_DIR
 from ..run.steps import STEPS_DIR
@@ -37,8 +38,9 @@ from .curve_report import CURVE_PLOT, curve_section, plot_curve
 from .episode_videos import MANIFEST, collect_videos
 from .family_report import FamilyReport, report_of
 from .html_report import write_html_report
-from .markdown import FAMILY_DETAILS, REPORT_FILE, decide_claims, render
+from .markdown import FAMILY_DETAILS, REPORT_FILE, _stages_section, decide_claims, render
 from .plots import write_plots
+from .stopping_report import render_auto
 
 PUBLISHED_CONFIG = "config.yaml"  # the study's config, committed next to its results.csv (docs/results/<study>/)
 REPORT_COMMAND = "report"  # factorworld report
@@ -88,6 +90,13 @@ def render_report(
     ``out_dir/episodes/``) in ``out_dir`` from ``results.csv`` rows and the families' files in ``out_dir``
     (``tail``: lines after report.md; ``companions``: the other studies of its finding, whose claims are
     corrected with its own: :func:`finding_companions`); report.md's and the plots' paths."""
+    if not cfg.trained_methods():  # a profile of given checkpoints: its results for their model pages
+        write_eval_results(cfg, rows, out_dir)
+    if cfg.eval.auto:  # intervals valid under the stopping only: none of the fixed-n sections, plots or page
+        text = render_auto(cfg, rows, command, planned, _stages_section(cfg, rows))
+        if tail:
+            text = text.rstrip("\n") + "\n\n" + "\n".join(tail)
+        return atomic_write_text(out_dir / REPORT_FILE, text), []
     plots = write_plots(rows, cfg, out_dir)
     verdicts = decide_claims(cfg, rows, companions)  # once, for both reports
     families = families_of(cfg)

@@ -22,6 +22,7 @@ from ...protocol.conditions import TRAIN_SUITE, shifted_factors
 from ..metrics import paired_gap, wilson_interval
 from ..plan.config import RADIUS_FACTORS, StudyConfig
 from ..plan.grid import Plan, radius_of
+from ..run.blocks import SEQUENTIAL
 from ..run.steps import Step, evaluated, is_done, provenance_of, read_result
 
 RESULTS_FILE = "results.csv"
@@ -41,11 +42,11 @@ RESULT_COLUMNS = (
     "episodes",
     "successes",
     "success_rate",
-    "ci_low",  # Wilson 95% interval of success_rate
+    "ci_low",  # Wilson 95% interval of success_rate (eval.episodes=auto: its anytime-valid interval)
     "ci_high",
     "train_success_rate",  # P_T of the same checkpoint on the same episode seeds
     "gap",  # P_T - P_F (0 for train)
-    "gap_ci_low",  # Newcombe paired 95% interval of gap
+    "gap_ci_low",  # Newcombe paired 95% interval of gap (eval.episodes=auto: its anytime-valid interval)
     "gap_ci_high",
     "envs_visited",  # environments the episodes visited (all, equally, unless flagged in report.md)
     "fingerprint",  # hash of the condition's environments (configurations and object-start width)
@@ -107,7 +108,13 @@ def _row(study: str, policy: str, evaluation: Evaluation, train: dict | None) ->
     low, high = wilson_interval(k, n)
     gap = gap_low = gap_high = p_train = math.nan
     condition = meta["condition"]
-    if train is not None and train["seeds"] == res["seeds"]:
+    stop = res.get(SEQUENTIAL)
+    if stop is not None:  # eval.episodes=auto: the anytime-valid intervals at the stop, on train's first n seeds
+        low, high = stop["success_low"], stop["success_high"]
+        if train is not None and train["seeds"][:n] == res["seeds"]:
+            p_train = sum(train["successes"][:n]) / n
+            gap, gap_low, gap_high = (0.0, math.nan, math.nan) if stop["gap"] is None else _gap_of(stop)
+    elif train is not None and train["seeds"] == res["seeds"]:
         p_train = sum(train["successes"]) / len(train["successes"])
         if condition == TRAIN_SUITE:
             gap = 0.0  # by construction: no interval
@@ -142,6 +149,10 @@ def _row(study: str, policy: str, evaluation: Evaluation, train: dict | None) ->
         "step": evaluation.step.key,
         **provenance_columns(res),
     }
+
+
+def _gap_of(stop: Mapping[str, Any]) -> tuple[float, float, float]:
+    return stop["gap"], stop["gap_low"], stop["gap_high"]
 
 
 def stage_counts_text(task: str, stages: Sequence[str] | None) -> str:

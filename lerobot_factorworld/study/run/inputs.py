@@ -198,7 +198,7 @@ class EvalInputs:
     ``environments``; the step has no dependency)."""
 
     OPTIONAL: ClassVar[frozenset[str]] = frozenset(
-        {"n_test_envs", "checkpoint", "environments", "batch_size", "checkpoint_epochs"}
+        {"n_test_envs", "checkpoint", "environments", "batch_size", "checkpoint_epochs", "sequential"}
     )
 
     condition: str
@@ -216,6 +216,9 @@ class EvalInputs:
     # A learning curve's checkpoint of the training, in nominal epochs (``TrainSettings.curve_every``); None: the
     # last checkpoint (not in the key, as always)
     checkpoint_epochs: float | None = None
+    # ``eval.episodes=auto``: the stopping rule's settings and the group's shifted conditions (``blocks.py``);
+    # ``episodes`` is then the budget. None: a fixed number of episodes, not in the key.
+    sequential: Mapping[str, Any] | None = None
 
     def __post_init__(self) -> None:
         if self.batch_size is not None and self.batch_size < 2:

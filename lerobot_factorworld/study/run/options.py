@@ -39,7 +39,9 @@ class RunOptions:
         push_to_hub: After the report, push ``episodes.parquet`` and ``results.csv`` with a dataset card to the
             Hugging Face dataset repo ``hub_repo_id`` (a token is checked before any work; an unreachable Hub
             is one warning line, and the local results stay complete). Not done while steps have failed.
-        hub_repo_id: ``user/name`` of that dataset repo (required by ``push_to_hub``).
+        hub_repo_id: ``user/name`` of that dataset repo (required by ``push_to_hub`` unless ``model_repo_id``).
+        model_repo_id: ``user/name`` of a model repo (the profiled checkpoint's): with ``push_to_hub``, a pull
+            request adds ``.eval_results/factorworld.yaml`` and the per-episode Parquet to it (a profile only).
         reuse_from: Other studies' folders whose finished steps this study uses where the keys (the inputs)
             are the same, linked into ``steps/`` instead of run again (``study/run/reuse.py``): e.g. F3 and F5
             reuse F1's seed-0 collections, trainings and single-factor evaluations.
@@ -56,6 +58,7 @@ class RunOptions:
     rerun_stale: bool = False
     push_to_hub: bool = False
     hub_repo_id: str | None = None
+    model_repo_id: str | None = None
     reuse_from: list[str] = field(default_factory=list)
 
     def __post_init__(self) -> None:
@@ -82,8 +85,11 @@ class RunOptions:
         if sum((self.dry_run, self.profile, self.fit_cost)) > 1:
             raise ValueError("dry_run, profile and fit_cost each inspect the study in their own way: set one")
         if self.push_to_hub:
-            if not self.hub_repo_id:
+            if not self.hub_repo_id and not self.model_repo_id:
                 raise ValueError(
                     "push_to_hub=true needs --hub_repo_id=<user>/<name>, the Hugging Face dataset repo to push to"
+                    " (or --model_repo_id=<user>/<name>, the model repo to open a pull request on)"
                 )
-            check_hub_repo_id(self.hub_repo_id, "hub_repo_id")
+            for name in ("hub_repo_id", "model_repo_id"):
+                if getattr(self, name):
+                    check_hub_repo_id(getattr(self, name), name)

@@ -254,6 +254,7 @@ def run_steps(steps_data: list[dict[str, Any]], study_dir: str, execution: str =
     if execution == "grouped":
         keep_freed_memory()
     out: dict[str, str | None] = {}
+    steps_data = _run_sequential_groups(steps_data, study_dir, execution, out)
     for data in steps_data:
         key = Step.from_dict(data).key
         try:
@@ -262,6 +263,62 @@ def run_steps(steps_data: list[dict[str, Any]], study_dir: str, execution: str =
         except Exception as err:  # noqa: BLE001 - reported per step by the runner, as a lone step's error
             out[key] = f"{type(err).__name__}: {err}"
     return out
+
+
+def _run_sequential_groups(
+    steps_data: list[dict[str, Any]], study_dir: str, execution: str, out: dict[str, str | None]
+) -> list[dict[str, Any]]:
+    """Run the ``eval.episodes=auto`` groups among ``steps_data`` (``blocks.py``), each as one unit, recording
+    ``{key: None | error}`` in ``out``; the other steps, left for :func:`run_steps`."""
+    # Deliberately here: blocks.py builds on this module (Step, EvalSession), so it cannot be imported at its top.
+    from . import blocks  # noqa: PLC0415
+
+    steps = [Step.from_dict(d) for d in steps_data]
+    groups: dict[str, list[Step]] = {}
+    for step in steps:
+        if blocks.is_sequential(step):
+            groups.setdefault(blocks.group_id(step), []).append(step)
+    for group in groups.values():
+        todo = [s for s in group if not is_done(s, study_dir)]
+        try:
+            if todo:
+                _run_group(todo, Path(study_dir), execution)
+            out.update({s.key: None for s in group})
+        except Exception as err:  # noqa: BLE001 - reported per step by the runner, as a lone step's error
+            out.update({s.key: f"{type(err).__name__}: {err}" for s in group if not is_done(s, study_dir)})
+    return [d for d, s in zip(steps_data, steps, strict=True) if not blocks.is_sequential(s)]
+
+
+def _run_group(steps: list[Step], study_dir: Path, execution: str) -> None:
+    """One group of sequential evaluations, in this process, each step's folder and result as :func:`run_step`'s."""
+    from . import blocks  # noqa: PLC0415 - blocks.py builds on this module (see _run_sequential_groups)
+
+    os.environ.setdefault("MUJOCO_GL", "egl")
+    made_by = provenance.current()
+    start = time.perf_counter()
+    timings = Timings()
+    for step in steps:
+        step.folder(study_dir).mkdir(parents=True, exist_ok=True)
+        atomic_write_text(step.folder(study_dir) / INPUTS_FILE, json.dumps(step.to_dict(), indent=1, sort_keys=True))
+
+    def open_session(step: Step) -> EvalSession:
+        deps = [_dep_folder(str(study_dir), key) for key in step.deps]
+        with _output_to(step.folder(study_dir) / LOG_FILE):
+            return EvalSession(step, step.folder(study_dir), deps, reload=True)
+
+    def write(step: Step, result: dict[str, Any]) -> None:
+        result["seconds"] = round(time.perf_counter() - start, 2)  # the group's time so far (shared work)
+        result[TIMINGS] = {**timings.as_dict(), "total": time.perf_counter() - start}
+        result[PROVENANCE] = made_by.to_dict()
+        stored = _portable(result, study_dir)
+        atomic_write_text(step.folder(study_dir) / RESULT_FILE, json.dumps(stored, indent=1, sort_keys=True))
+
+    token = _CURRENT.set((timings, execution))
+    try:
+        with _output_to(steps[0].folder(study_dir) / LOG_FILE):
+            blocks.run_group(steps, study_dir, open_session, write)
+    finally:
+        _CURRENT.reset(token)
 
 
 @contextlib.contextmanager
@@ -583,93 +640,124 @@ def train_log_seconds(log: str, steps: int) -> dict[str, float]:
 
 
 def _run_eval(step: Step, folder: Path, deps: list[Path]) -> dict[str, Any]:
-    timings, execution = _current()
-    with timings.span("imports"):  # paid once per worker process: later steps find them imported
-        # Deliberately here: torch and LeRobot's evaluation stack (seconds to import), only in the process
-        # that evaluates (planning never needs them).
-        import torch  # noqa: PLC0415
-        from lerobot.envs.factory import make_env, make_env_pre_post_processors  # noqa: PLC0415
-        from lerobot.scripts.lerobot_eval import eval_policy_all  # noqa: PLC0415
+    session = EvalSession(step, folder, deps)
+    inputs = session.inputs
+    successes = session.episodes(inputs.start_seed, inputs.episodes)
+    return session.result(successes, [inputs.start_seed + i for i in range(len(successes))])
 
-    inputs, run = EvalInputs.from_dict(step.inputs), step.run
-    torch.set_num_threads(run.get("threads", 1))
-    if inputs.checkpoint is not None:  # a given checkpoint, unchanged since it was planned, in its environments
-        checkpoint = str(checkpoint_folder(run[GIVEN_CHECKPOINT], inputs.checkpoint))
-        env_cfg = eval_env_config(inputs.environments, None, inputs)
-    else:  # trained on a dataset, whose own environments are the training condition
-        collect_folder = _dep_of_kind(deps, "collect")
-        collect_inputs = CollectInputs.from_dict(json.loads((collect_folder / INPUTS_FILE).read_text())["inputs"])
-        train_folder = _dep_of_kind(deps, "train")
-        trained = read_result(train_folder)
-        checkpoint = trained["checkpoint"]
-        if inputs.checkpoint_epochs is not None:  # a learning curve's earlier checkpoint
-            saved_at = trained.get("curve", {}).get(str(inputs.checkpoint_epochs))
-            if saved_at is None:
-                raise RuntimeError(
-                    f"the training saved no checkpoint at {inputs.checkpoint_epochs} epochs ({train_folder})"
-                )
-            checkpoint = str(curve_checkpoint(train_folder, saved_at))
-        env_cfg = eval_env_config(collect_inputs, read_result(collect_folder)["root"], inputs)
-    task = env_cfg.task_names[0]
-    configs = env_cfg.suites(task)[inputs.condition]
 
-    with timings.span("policy_load"):
-        policy_cfg, policy, preprocessor, postprocessor = _load_policy(
-            checkpoint, env_cfg, inputs.device, inputs.start_seed, cached=execution == "grouped"
-        )
-    with timings.span("env_build"):
-        env_pre, env_post = make_env_pre_post_processors(env_cfg=env_cfg, policy_cfg=policy_cfg)
-        envs = make_env(env_cfg, n_envs=inputs.batch_size or 1, use_async_envs=False)
-    # Stages, lengths and the first episodes' frames, from the envs' own observer hook (instances only).
-    recorded = range(inputs.start_seed, inputs.start_seed + min(run.get(RECORD_SETTING, 0), inputs.episodes))
-    recorder = EpisodeRecorder(frozenset(recorded))
-    # timed, unchanged (each part exclusive of the parts inside it): scene compilation and rendering, the
-    # environments' resets and steps (on these env instances), the policy's actions, the rest of LeRobot's rollout
-    with contextlib.ExitStack() as stack:
-        for env in _factorworld_envs(envs):
-            env.episode_observer = recorder  # stages, lengths and the first episodes' frames, from the env's hook
-            env.timer = timings.span  # scene compilation and rendering, from the env's own hook
-            stack.enter_context(timings.wrap(env, "reset", "env_reset"))
-            stack.enter_context(timings.wrap(env, "step", "env_step"))
-        stack.enter_context(timings.wrap(policy, "select_action", "policy"))
-        stack.enter_context(timings.span("rollout_other"))
-        stack.enter_context(torch.no_grad())
-        info = eval_policy_all(
-            envs,
-            policy,
-            env_pre,
-            env_post,
-            preprocessor,
-            postprocessor,
-            n_episodes=inputs.episodes,
-            max_episodes_rendered=0,
-            start_seed=inputs.start_seed,
-        )
-    with timings.span("records"):
-        successes = [bool(s) for s in info["per_task"][0]["metrics"]["successes"]]
-        seeds = [inputs.start_seed + i for i in range(len(successes))]
-        cover = coverage(seeds, len(configs))
-        width = env_cfg.sampling.widths.get("object_pos")
-        result = {
-            "env_steps": timings.calls.get("env_step", 0),  # the cost model's unit (not a result)
-            "condition": inputs.condition,
-            "successes": successes,
-            "seeds": seeds,
-            "stages": of_seeds(recorder.stages, seeds),  # the furthest stage of every episode (envs/stages.py)
-            "lengths": of_seeds(recorder.lengths, seeds),  # steps of every episode
-            "n_envs": len(configs),
-            "envs_visited": cover.visited,
-            "equal_visits": cover.equal,
-            "fingerprint": fingerprint(configs, width),
-            "checkpoint": checkpoint,
-            "policy_type": policy_cfg.type,  # a given checkpoint's type is known from it only
-        }
-        if recorder.frames:  # the recorded episodes' frames as videos (not results: they change no number)
-            result[RECORDED_KEY] = write_recorded(recorder, seeds, folder)
-        family = family_of(task)
-        if family.content_key:  # what every episode asked for (e.g. instruction, named object), for breakdowns
-            result[family.content_key] = family.episode_records(configs, seeds, width)
-    return result
+class EvalSession:
+    """One condition of one checkpoint, ready to run episodes: its environments, policy and records. A plain
+    evaluation runs its episodes once; ``eval.episodes=auto`` (``blocks.py``) runs them block by block."""
+
+    def __init__(self, step: Step, folder: Path, deps: list[Path], reload: bool = False) -> None:
+        timings, execution = _current()
+        with timings.span("imports"):  # paid once per worker process: later steps find them imported
+            # Deliberately here: torch and LeRobot's evaluation stack (seconds to import), only in the process
+            # that evaluates (planning never needs them).
+            import torch  # noqa: PLC0415
+            from lerobot.envs.factory import make_env, make_env_pre_post_processors  # noqa: PLC0415
+
+        inputs, run = EvalInputs.from_dict(step.inputs), step.run
+        torch.set_num_threads(run.get("threads", 1))
+        if inputs.checkpoint is not None:  # a given checkpoint, unchanged since it was planned, in its environments
+            checkpoint = str(checkpoint_folder(run[GIVEN_CHECKPOINT], inputs.checkpoint))
+            env_cfg = eval_env_config(inputs.environments, None, inputs)
+        else:  # trained on a dataset, whose own environments are the training condition
+            collect_folder = _dep_of_kind(deps, "collect")
+            collect_inputs = CollectInputs.from_dict(json.loads((collect_folder / INPUTS_FILE).read_text())["inputs"])
+            train_folder = _dep_of_kind(deps, "train")
+            trained = read_result(train_folder)
+            checkpoint = trained["checkpoint"]
+            if inputs.checkpoint_epochs is not None:  # a learning curve's earlier checkpoint
+                saved_at = trained.get("curve", {}).get(str(inputs.checkpoint_epochs))
+                if saved_at is None:
+                    raise RuntimeError(
+                        f"the training saved no checkpoint at {inputs.checkpoint_epochs} epochs ({train_folder})"
+                    )
+                checkpoint = str(curve_checkpoint(train_folder, saved_at))
+            env_cfg = eval_env_config(collect_inputs, read_result(collect_folder)["root"], inputs)
+        self.inputs, self.folder, self.timings, self.env_cfg = inputs, folder, timings, env_cfg
+        self.checkpoint, self.task = checkpoint, env_cfg.task_names[0]
+        self.configs = env_cfg.suites(self.task)[inputs.condition]
+        # reload: every block starts from the RNG state a fresh load leaves (blocks.py), so a block's outcomes
+        # depend on its seeds only; a plain evaluation loads once, cached across a grouped worker's conditions
+        self.cached = reload or execution == "grouped"
+        self.reload = reload
+        self._load()
+        with timings.span("env_build"):
+            self.env_pre, self.env_post = make_env_pre_post_processors(env_cfg=env_cfg, policy_cfg=self.policy_cfg)
+            self.envs = make_env(env_cfg, n_envs=inputs.batch_size or 1, use_async_envs=False)
+        # Stages, lengths and the first episodes' frames, from the envs' own observer hook (instances only).
+        recorded = range(inputs.start_seed, inputs.start_seed + min(run.get(RECORD_SETTING, 0), inputs.episodes))
+        self.recorder = EpisodeRecorder(frozenset(recorded))
+
+    def _load(self) -> None:
+        with self.timings.span("policy_load"):
+            self.policy_cfg, self.policy, self.preprocessor, self.postprocessor = _load_policy(
+                self.checkpoint, self.env_cfg, self.inputs.device, self.inputs.start_seed, cached=self.cached
+            )
+
+    def episodes(self, start_seed: int, n: int) -> list[bool]:
+        """Run ``n`` episodes reset with seeds ``start_seed`` on (LeRobot's ``eval_policy_all``); their successes."""
+        import torch  # noqa: PLC0415 - imported by __init__ already (seconds the first time)
+        from lerobot.scripts.lerobot_eval import eval_policy_all  # noqa: PLC0415 - LeRobot's evaluation stack
+
+        if self.reload:
+            self._load()
+        timings = self.timings
+        # timed, unchanged (each part exclusive of the parts inside it): scene compilation and rendering, the
+        # environments' resets and steps (on these env instances), the policy's actions, the rest of LeRobot's rollout
+        with contextlib.ExitStack() as stack:
+            for env in _factorworld_envs(self.envs):
+                env.episode_observer = self.recorder  # stages, lengths and the first episodes' frames
+                env.timer = timings.span  # scene compilation and rendering, from the env's own hook
+                stack.enter_context(timings.wrap(env, "reset", "env_reset"))
+                stack.enter_context(timings.wrap(env, "step", "env_step"))
+            stack.enter_context(timings.wrap(self.policy, "select_action", "policy"))
+            stack.enter_context(timings.span("rollout_other"))
+            stack.enter_context(torch.no_grad())
+            info = eval_policy_all(
+                self.envs,
+                self.policy,
+                self.env_pre,
+                self.env_post,
+                self.preprocessor,
+                self.postprocessor,
+                n_episodes=n,
+                max_episodes_rendered=0,
+                start_seed=start_seed,
+            )
+        return [bool(s) for s in info["per_task"][0]["metrics"]["successes"]]
+
+    def result(
+        self, successes: list[bool], seeds: list[int], stages: list[str] | None = None, lengths: list[int] | None = None
+    ) -> dict[str, Any]:
+        """The step's result for these episodes (``stages`` and ``lengths``: a block's, read back from its cache)."""
+        with self.timings.span("records"):
+            recorder, configs, folder = self.recorder, self.configs, self.folder
+            cover = coverage(seeds, len(configs))
+            width = self.env_cfg.sampling.widths.get("object_pos")
+            result = {
+                "env_steps": self.timings.calls.get("env_step", 0),  # the cost model's unit (not a result)
+                "condition": self.inputs.condition,
+                "successes": successes,
+                "seeds": seeds,
+                "stages": stages or of_seeds(recorder.stages, seeds),  # the furthest stage of every episode
+                "lengths": lengths or of_seeds(recorder.lengths, seeds),  # steps of every episode
+                "n_envs": len(configs),
+                "envs_visited": cover.visited,
+                "equal_visits": cover.equal,
+                "fingerprint": fingerprint(configs, width),
+                "checkpoint": self.checkpoint,
+                "policy_type": self.policy_cfg.type,  # a given checkpoint's type is known from it only
+            }
+            if recorder.frames:  # the recorded episodes' frames as videos (not results: they change no number)
+                result[RECORDED_KEY] = write_recorded(recorder, seeds, folder)
+            family = family_of(self.task)
+            if family.content_key:  # what every episode asked for (e.g. instruction, named object), for breakdowns
+                result[family.content_key] = family.episode_records(configs, seeds, width)
+        return result
 
 
 def _factorworld_envs(envs: dict) -> Iterator[Any]:

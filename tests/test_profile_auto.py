@@ -1,0 +1,150 @@
+"""``--eval.episodes=auto``: a profile evaluated in blocks of paired seeds until each shifted condition is decided
+(study/sequential.py, study/run/blocks.py): every episode run is kept, each condition says why it stopped, the
+rule is in the keys (and absent from them without auto), a rerun runs nothing, and a study whose claims need
+fixed-n intervals refuses auto in one line."""
+
+import csv
+import json
+
+import pytest
+
+PROFILE = ["--task=pick-place", "--n_train_envs=1", "--train_factors=[light]", "--factors=[light,table_texture]"]
+AUTO = ["--eval.n_test_envs=2", "--eval.episodes=auto", "--eval.block=2", "--eval.max_episodes=8",
+        "--eval.max_episode_steps=4"]  # fmt: skip
+
+
+def _config(checkpoint, out, *args):
+    from lerobot_factorworld.core.settings import parse_config
+    from lerobot_factorworld.study.plan.policy_profile import ProfileConfig
+
+    return parse_config(ProfileConfig, [f"--policy.path={checkpoint}", *PROFILE, f"--out_dir={out}", *args], "profile")
+
+
+def test_the_rule_is_in_the_keys_only_with_auto(factorworld_checkpoint, tmp_path):
+    from lerobot_factorworld.study.plan.grid import make_plan
+
+    auto = make_plan(_config(factorworld_checkpoint, tmp_path, *AUTO, "--eval.tolerance=0.5").study())
+    fixed = make_plan(_config(factorworld_checkpoint, tmp_path, "--eval.n_test_envs=2", "--eval.episodes=8").study())
+    rules = [s.inputs["sequential"] for s in auto.evaluations()]
+    assert rules[0]["conditions"] == ["light", "table_texture"] and rules[0]["tolerance"] == 0.5
+    assert all(r == rules[0] for r in rules) and all(s.inputs["episodes"] == 8 for s in auto.evaluations())
+    assert all("sequential" not in s.inputs for s in fixed.evaluations())
+    other = make_plan(_config(factorworld_checkpoint, tmp_path, *AUTO, "--eval.tolerance=0.2").study())
+    assert not {s.key for s in other.steps} & {s.key for s in auto.steps}  # a rule setting changes every key
+
+
+def test_auto_is_refused_where_claims_need_fixed_n_intervals(factorworld_checkpoint, tmp_path):
+    from lerobot_factorworld.study.plan.config import EvalSettings, MethodConfig, StudyConfig
+
+    given = [MethodConfig("given", checkpoint=str(factorworld_checkpoint))]
+    base = {"tasks": ["pick-place"], "n_train_envs": [1], "train_factors": ["light"], "factors": ["light"],
+            "methods": given}  # fmt: skip
+    auto = EvalSettings(n_test_envs=2, episodes="auto", block=2, max_episodes=8)
+    with pytest.raises(ValueError, match=r"^eval.episodes=auto stops .* claims over seeds \[0, 1\] .*give eval"):
+        StudyConfig(**base, seeds=[0, 1], eval=auto)
+    with pytest.raises(ValueError, match="multiple of eval.block=2"):
+        StudyConfig(**base, eval=EvalSettings(n_test_envs=2, episodes="auto", block=2, max_episodes=7))
+    with pytest.raises(ValueError, match="whole number or auto"):
+        EvalSettings(episodes="many")
+    assert StudyConfig(**base, eval=auto).eval.stop_rule().block == 2  # one seed, no claims: allowed
+
+
+@pytest.mark.slow
+def test_an_auto_profile_stops_each_condition_keeps_every_episode_and_says_why(factorworld_checkpoint, tmp_path):
+    from lerobot_factorworld.study.plan.grid import make_plan
+    from lerobot_factorworld.study.results.episodes import read_episodes
+    from lerobot_factorworld.study.run.steps import is_done, read_result
+    from lerobot_factorworld.study.runner import run_study
+
+    out = tmp_path / "auto"
+    profile = _config(factorworld_checkpoint, out, *AUTO, "--eval.tolerance=0.5")
+    outcome = run_study(profile.study(), profile.options(), "factorworld profile ...")
+    assert outcome.ran["eval"] == 3 and not outcome.failed
+    plan = make_plan(profile.study())
+    results = {r["condition"]: r for r in (read_result(s, out) for s in plan.evaluations())}
+    # an untrained policy fails everywhere: every gap is 0, so each condition stops within the tolerance
+    for condition in ("light", "table_texture"):
+        stop = results[condition]["sequential"]
+        assert stop["reason"] == "within tolerance" and -0.5 <= stop["gap_low"] <= 0 <= stop["gap_high"] <= 0.5
+        assert stop["episodes"] % 2 == 0 and results[condition]["seeds"] == list(range(1000, 1000 + stop["episodes"]))
+    assert results["train"]["sequential"]["episodes"] == max(r["sequential"]["episodes"] for r in results.values())
+    rows = {r["condition"]: r for r in csv.DictReader(open(out / "results.csv"))}
+    assert float(rows["light"]["gap_ci_low"]) == results["light"]["sequential"]["gap_low"]  # the anytime interval
+    episodes = read_episodes(out / "episodes.parquet")
+    assert len(episodes) == sum(len(r["seeds"]) for r in results.values())  # every episode run
+    report = (out / "report.md").read_text()
+    assert "## How each condition stopped" in report and "anytime-valid" in report and "within tolerance" in report
+    assert "bootstrap" not in report.split("## How each condition stopped")[1]  # no fixed-n interval shown
+    blocks = sorted(p.name for p in plan.evaluations()[1].folder(out).joinpath("blocks").iterdir())
+    assert blocks[0] == "1000.json" and json.loads(
+        (plan.evaluations()[1].folder(out) / "blocks" / blocks[0]).read_text()
+    )
+    # the same command again: every evaluation cached
+    assert all(is_done(step, out) for step in plan.steps)
+    again = run_study(profile.study(), profile.options(), "factorworld profile ...")
+    assert again.ran["eval"] == 0
+
+    # results where the Hub shows them: one entry per task and condition, the documented fields
+    import yaml
+
+    from lerobot_factorworld import __version__
+    from lerobot_factorworld.study.results.eval_results import ENTRY_FIELDS
+
+    entries = yaml.safe_load((out / ".eval_results" / "factorworld.yaml").read_text())
+    assert [e["dataset"]["task_id"] for e in entries] == [
+        "pick-place/train",
+        "pick-place/light",
+        "pick-place/table_texture",
+    ]
+    for entry in entries:
+        assert tuple(entry) == ENTRY_FIELDS and set(entry["dataset"]) == {"id", "task_id"}
+        assert entry["value"] == 0.0 and isinstance(entry["value"], float)  # success in percent
+        assert "8 episodes" in entry["notes"] and "anytime-valid 95% interval" in entry["notes"]
+        assert f"lerobot_factorworld {__version__}" in entry["notes"]
+    assert "stopped: within tolerance" in entries[1]["notes"]
+    card = yaml.safe_load((out / "eval.yaml").read_text())
+    assert {t["id"] for t in card["tasks"]} == {e["dataset"]["task_id"] for e in entries}
+    import datasets
+
+    loaded = datasets.load_dataset("parquet", data_files=str(out / "episodes.parquet"), split="train")
+    assert loaded.num_rows == len(episodes) and "success" in loaded.column_names
+
+
+def test_push_opens_a_pull_request_on_the_model_repo_and_offline_loses_nothing(tmp_path, monkeypatch):
+    """The pull request's files and ``create_pr`` through a stand-in for the Hub client; then the real path with
+    ``HF_HUB_OFFLINE=1`` (read when huggingface_hub is imported: a new process): one line, files unchanged."""
+    import subprocess
+    import sys
+
+    import huggingface_hub
+
+    from lerobot_factorworld.study.results import eval_results
+
+    (tmp_path / ".eval_results").mkdir()
+    (tmp_path / ".eval_results" / "factorworld.yaml").write_text("- value: 1.0\n")
+    (tmp_path / "episodes.parquet").write_bytes(b"PAR1")
+    calls = []
+
+    class Api:
+        def create_commit(self, repo_id, operations, commit_message, create_pr):
+            calls.append((repo_id, sorted(o.path_in_repo for o in operations), create_pr))
+            return type("Commit", (), {"pr_url": f"https://huggingface.co/{repo_id}/discussions/1"})()
+
+    monkeypatch.setattr(huggingface_hub, "HfApi", Api)
+    monkeypatch.setattr(eval_results, "check_hub_reachable", lambda: None)
+    opened, line = eval_results.open_model_pr(tmp_path, "someone/bc")
+    assert opened and calls == [
+        ("someone/bc", [".eval_results/factorworld.yaml", "factorworld/episodes.parquet"], True)
+    ]
+    assert line.endswith("/discussions/1")
+
+    code = (
+        "from lerobot_factorworld.study.results.eval_results import open_model_pr\n"
+        f"print(*open_model_pr({str(tmp_path)!r}, 'someone/bc'), sep='\\n')\n"
+    )
+    env = {**__import__("os").environ, "HF_HUB_OFFLINE": "1", "HF_TOKEN": "hf_not_a_token"}
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env, timeout=120)
+    assert proc.returncode == 0 and "Traceback" not in proc.stderr, proc.stderr[-2000:]
+    opened, line = proc.stdout.strip().splitlines()[-2:]
+    assert opened == "False" and line.startswith("warning: no pull request opened on someone/bc: could not reach")
+    assert "nothing was lost" in line and (tmp_path / "episodes.parquet").read_bytes() == b"PAR1"
