@@ -75,6 +75,9 @@ def test_an_auto_profile_stops_each_condition_keeps_every_episode_and_says_why(f
     report = (out / "report.md").read_text()
     assert "## How each condition stopped" in report and "anytime-valid" in report and "within tolerance" in report
     assert "bootstrap" not in report.split("## How each condition stopped")[1]  # no fixed-n interval shown
+    page = (out / "report.html").read_text()  # the page: how each stopped, the stages, the paired viewer; no bootstrap
+    assert "How each condition stopped" in page and "within tolerance" in page and "Paired episodes" in page
+    assert "bootstrap" not in page and "The paper&#x27;s claims" not in page and "The paper's claims" not in page
     blocks = sorted(p.name for p in plan.evaluations()[1].folder(out).joinpath("blocks").iterdir())
     assert blocks[0] == "1000.json" and json.loads(
         (plan.evaluations()[1].folder(out) / "blocks" / blocks[0]).read_text()

@@ -18,6 +18,7 @@ import html
 import json
 import re
 from collections.abc import Sequence
+from dataclasses import dataclass
 from pathlib import Path
 
 from ...core.io import atomic_write_text
@@ -66,26 +67,46 @@ NO_EPISODES = (
 )
 
 
+@dataclass(frozen=True)
+class StoppingTable:
+    """An ``eval.episodes=auto`` evaluation's stopping table for the page: its note, columns and cells."""
+
+    note: str
+    columns: Sequence[str]
+    cells: Sequence[Sequence[str]]
+
+
 def write_html_report(
     cfg: StudyConfig,
     rows: Sequence[dict],
     out_dir: str | Path,
     verdicts: Sequence[ClaimVerdict],
     curve: Sequence[dict] = (),
+    stopping: StoppingTable | None = None,
 ) -> Path:
     """Write ``out_dir/report.html`` (and ``plotly.min.js`` where the folder has no copy of it) from ``results.csv``
     rows, the claims decided on them (``markdown.decide_claims``) and the learning curve's points (``curve.csv``'s
-    rows; none: no such section); the viewer reads ``out_dir/episodes/``."""
+    rows; none: no such section); the viewer reads ``out_dir/episodes/``. With ``stopping`` (an
+    ``eval.episodes=auto`` evaluation), the page shows how each condition stopped, where episodes fail and the
+    paired episodes only: every other section rests on fixed-n intervals, which that stopping invalidates."""
     out_dir = Path(out_dir)
     rows = list(rows)
-    sections = [
-        ("gaps", "Each factor's gap", _gap_section(cfg, rows)),
-        ("claims", "The paper's claims", _claims_section(verdicts)),
-        ("stages", "Where episodes fail", _stages_section(cfg, rows)),
-        ("success", "Success rates", _success_section(cfg, rows)),
-        *([("curve", "Learning curve", _curve_section(curve))] if curve else []),
-        ("episodes", "Paired episodes", _viewer_section(out_dir)),
-    ]
+    if stopping is not None:
+        sections = [
+            ("stopping", "How each condition stopped",
+             _p(stopping.note) + _table(stopping.columns, stopping.cells, numeric=(4, 6, 7, 8, 9))),
+            ("stages", "Where episodes fail", _stages_section(cfg, rows)),
+            ("episodes", "Paired episodes", _viewer_section(out_dir)),
+        ]  # fmt: skip
+    else:
+        sections = [
+            ("gaps", "Each factor's gap", _gap_section(cfg, rows)),
+            ("claims", "The paper's claims", _claims_section(verdicts)),
+            ("stages", "Where episodes fail", _stages_section(cfg, rows)),
+            ("success", "Success rates", _success_section(cfg, rows)),
+            *([("curve", "Learning curve", _curve_section(curve))] if curve else []),
+            ("episodes", "Paired episodes", _viewer_section(out_dir)),
+        ]
     entries = _episodes(out_dir)
     page = PAGE.format(
         title=_e(f"Study {cfg.name}"),

@@ -45,17 +45,30 @@ def decision(row: StopRow) -> str:
     return "not decided"
 
 
-def stop_table(cfg: StudyConfig, rows: Sequence[dict]) -> list[str]:
-    lines = ["| " + " | ".join(STOP_COLUMNS) + " |", "|---|---|---|---|---:|---|---:|---|---:|---|---|"]
+def stop_cells(cfg: StudyConfig, rows: Sequence[dict]) -> list[tuple[str, ...]]:
+    """The stopping table's cells (:data:`STOP_COLUMNS`), one row per condition: what report.md and report.html
+    both show."""
+    out = []
     for r in stop_rows(cfg, rows):
         is_train = r.condition == TRAIN_SUITE
-        cells = (
+        out.append((
             r.method, r.task, str(r.n_train_envs), r.condition, str(r.episodes), r.reason, f"{r.success_rate:.3f}",
             ci(r.success_low, r.success_high, sign=False), "" if is_train else f"{r.gap:+.3f}",
             "" if is_train else ci(r.gap_low, r.gap_high), decision(r),
-        )  # fmt: skip
-        lines.append("| " + " | ".join(cells) + " |")
-    return lines
+        ))  # fmt: skip
+    return out
+
+
+def stop_table(cfg: StudyConfig, rows: Sequence[dict]) -> list[str]:
+    lines = ["| " + " | ".join(STOP_COLUMNS) + " |", "|---|---|---|---|---:|---|---:|---|---:|---|---|"]
+    return lines + ["| " + " | ".join(cells) + " |" for cells in stop_cells(cfg, rows)]
+
+
+STOPPED_NOTE = (
+    "*stopped*: `decided` (the interval of the gap excludes 0), `within tolerance` (it lies inside ±{tolerance:g}), "
+    "`budget` ({budget} episodes, neither), `paired` (train: as long as the longest of its conditions; a "
+    "condition's gap pairs it with train's first episodes)."
+)
 
 
 def render_auto(cfg: StudyConfig, rows: list[dict], command: str, planned: int, stages: list[str]) -> str:
@@ -84,9 +97,7 @@ def render_auto(cfg: StudyConfig, rows: list[dict], command: str, planned: int, 
         "",
         *stop_table(cfg, rows),
         "",
-        "*stopped*: `decided` (the interval of the gap excludes 0), `within tolerance` (it lies inside "
-        f"±{cfg.eval.tolerance:g}), `budget` ({cfg.eval.max_episodes} episodes, neither), `paired` (train: as long "
-        "as the longest of its conditions; a condition's gap pairs it with train's first episodes).",
+        STOPPED_NOTE.format(tolerance=cfg.eval.tolerance, budget=cfg.eval.max_episodes),
         "",
         *stages,
     ]

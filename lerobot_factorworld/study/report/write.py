@@ -34,13 +34,14 @@ from ..results.eval_results import write_eval_results
 from ..results.rows import RESULTS_FILE, finished_evaluations, read_results, result_rows, write_results
 from ..run.recording import VIDEOS_DIR
 from ..run.steps import STEPS_DIR
+from ..sequential import INTERVAL_LABEL
 from .curve_report import CURVE_PLOT, curve_section, plot_curve
 from .episode_videos import MANIFEST, collect_videos
 from .family_report import FamilyReport, report_of
-from .html_report import write_html_report
+from .html_report import StoppingTable, write_html_report
 from .markdown import FAMILY_DETAILS, REPORT_FILE, _stages_section, decide_claims, render
 from .plots import write_plots
-from .stopping_report import render_auto
+from .stopping_report import STOP_COLUMNS, STOPPED_NOTE, render_auto, rule_text, stop_cells
 
 PUBLISHED_CONFIG = "config.yaml"  # the study's config, committed next to its results.csv (docs/results/<study>/)
 REPORT_COMMAND = "report"  # factorworld report
@@ -96,6 +97,10 @@ def render_report(
         text = render_auto(cfg, rows, command, planned, _stages_section(cfg, rows))
         if tail:
             text = text.rstrip("\n") + "\n\n" + "\n".join(tail)
+        note = f"Every interval is {INTERVAL_LABEL}: {rule_text(cfg)}. " + STOPPED_NOTE.format(
+            tolerance=cfg.eval.tolerance, budget=cfg.eval.max_episodes
+        )
+        write_html_report(cfg, rows, out_dir, [], stopping=StoppingTable(note, STOP_COLUMNS, stop_cells(cfg, rows)))
         return atomic_write_text(out_dir / REPORT_FILE, text), []
     plots = write_plots(rows, cfg, out_dir)
     verdicts = decide_claims(cfg, rows, companions)  # once, for both reports
