@@ -176,7 +176,10 @@ def test_a_method_merged_on_part_of_the_grid_is_compared_on_the_cells_both_have(
     gap = lambda rs: np.mean([r["gap"] for r in rs if r["condition"] != "train"])  # noqa: E731
     assert d.point == pytest.approx(gap(treat0) - gap(base0))
     assert d.cells == 2 * 3  # two methods x (train + two factors), one seed, one task
-    # the per-task Spearman differences too: with no shared cell, none
+    # with no shared cell the claim is n/a, and so are the per-task Spearman differences
+    apart = [r for r in rows if not (r["method"] == "base" and r["task"] == "door-open")]
+    (none,) = decide([SHRINKS], _two_methods(), apart)
+    assert none.comparisons == [] and "share no cell" in "\n".join(claims_section([none]))
     assert aggregate.method_rho_differences([r for r in rows if r["task"] == "pick-place"], ["base", "treat"],
                                             ALL, {"camera_pos": 1, "light": 2}) == {}  # fmt: skip
 

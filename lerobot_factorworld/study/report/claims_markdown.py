@@ -87,6 +87,8 @@ def claim_cells(v: ClaimVerdict) -> tuple[str, str, str]:
     comparison that decides it (the one that disagrees, else the weakest)."""
     d = v.summary
     if d is None:
+        if v.claim.baseline:  # two methods: compared only where both ran
+            return "n/a", "none", f"{v.claim.method} and {v.claim.baseline} share no cell (task, N, seed, condition)"
         return "no data", "none", "the study has no rows for it"
     if len(v.comparisons) == 1:
         return _num(d.point) + _success_changes(d), _interval(d), to_resolve(d)
