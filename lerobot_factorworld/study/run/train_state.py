@@ -34,7 +34,7 @@ CHECKPOINTS_DIR = "checkpoints"
 PRETRAINED_DIR = "pretrained_model"
 STATE_DIR = "training_state"
 TRAIN_CONFIG = "train_config.json"
-PARTIAL = ".partial-"  # a save being written: <checkpoints>/.partial-<step>, renamed to <step> once complete
+PARTIAL = ".partial-"  # a save being written (renamed to <step> once complete) or deleted (renamed from it first)
 # What a complete save holds (LeRobot writes them in this order; a scheduler's state only when there is one).
 COMPLETE = (
     f"{PRETRAINED_DIR}/model.safetensors",
@@ -211,8 +211,10 @@ def _save_atomically(save: Callable[..., None], checkpoint_dir: Path, step: int,
         shutil.rmtree(partial)
     with _as_fresh_run(cfg):
         save(checkpoint_dir=partial, step=step, cfg=cfg, **kwargs)
-    if checkpoint_dir.exists():
-        shutil.rmtree(checkpoint_dir)
+    if checkpoint_dir.exists():  # set aside whole, then replaced: a kill in between leaves the new save partial only
+        old = checkpoint_dir.with_name(f"{PARTIAL}old-{checkpoint_dir.name}")
+        os.replace(checkpoint_dir, old)
+        shutil.rmtree(old)
     os.replace(partial, checkpoint_dir)
 
 
@@ -243,4 +245,6 @@ def prune(checkpoints: Path, newest: int, saves: Saves) -> None:
         return
     for step, folder in saved_steps(checkpoints.parent).items():
         if step < newest and not saves.own(step):
-            shutil.rmtree(folder)
+            gone = folder.with_name(f"{PARTIAL}{folder.name}")  # renamed first: a kill mid-deletion leaves no half save
+            os.replace(folder, gone)
+            shutil.rmtree(gone)
