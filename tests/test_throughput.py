@@ -198,6 +198,22 @@ def test_keeping_freed_memory_is_set_once_and_inherited_by_forked_workers():
     assert proc.stdout.splitlines() == ["default False", "set True", "again True", "forked child True"], proc.stdout
 
 
+def test_bench_study_quick_grid_is_the_default_grid_smaller():
+    """``--quick`` (what the test below runs) shrinks demos, steps and episodes only: the same tasks, N, seeds,
+    factors and methods, so every code path the default grid reaches (its report's sections) is run."""
+    import importlib.util  # noqa: PLC0415 - the script is not a module of the package
+
+    spec = importlib.util.spec_from_file_location("bench_study", ROOT / "scripts" / "bench_study.py")
+    bench = importlib.util.module_from_spec(spec)
+    sys.path.insert(0, str(ROOT / "scripts"))
+    try:
+        spec.loader.exec_module(bench)
+    finally:
+        sys.path.remove(str(ROOT / "scripts"))
+    assert set(bench.QUICK) <= {"collect", "train", "eval"}, sorted(bench.QUICK)
+    assert len(bench.GRID["factors"]) > 1
+
+
 @pytest.mark.slow
 def test_bench_study_quick_runs_both_executions_with_identical_results():
     env = {**os.environ, "MUJOCO_GL": os.environ.get("MUJOCO_GL", "egl")}

@@ -384,6 +384,12 @@ class TrainSettings:
         curve_every: A learning curve: a checkpoint every this many epochs (needs ``epochs``; 0, the default:
             none), each evaluated on the ``train`` condition as its own cached step, so P_T is measured against
             training time (``curve.csv``, the report's "Learning curve"). In the training step's key when set.
+        extends: Shorter budgets (epochs, or steps without ``epochs``), increasing, that the training passes
+            through as steps of their own: the first trains from scratch, each next one continues the one before
+            from its saved state, and the full budget continues the last; a cached one is never trained again, so
+            a longer budget costs only its new epochs. Each continuing training's key holds the one it continues.
+            Exact (the same checkpoints as one run) for a policy without a learning-rate schedule, the only kind
+            it is allowed for: a schedule LeRobot builds from ``--steps`` would differ. ``[]``: one run.
     """
 
     steps: int = 1000
@@ -393,6 +399,17 @@ class TrainSettings:
     device: str = "cpu"
     extra_args: list[str] = field(default_factory=list)
     curve_every: float = 0
+    extends: list[float] = field(default_factory=list)
+
+    def budget(self) -> float:
+        """What ``extends`` counts in: ``epochs``, or ``steps`` without epochs."""
+        return self.steps if self.epochs is None else self.epochs
+
+    def at_budget(self, budget: float) -> TrainSettings:
+        """These settings trained for ``budget`` (one of ``extends``) instead, extending nothing themselves."""
+        if self.epochs is None:
+            return replace(self, steps=int(budget), extends=[])
+        return replace(self, epochs=budget, extends=[])
 
     def curve_epochs(self) -> list[float]:
         """The learning curve's checkpoints before the last, in nominal epochs (``curve_every`` apart)."""
@@ -432,6 +449,39 @@ def _check_train(train: TrainSettings, where: str) -> None:
             f"{train.curve_every!r} with epochs {train.epochs!r}"
         )
     check_at_least(f"{where}.batch_size", train.batch_size, 1)
+    budgets = [*train.extends, train.budget()]
+    if train.extends and not (
+        all(_positive_number(b) for b in budgets)
+        and all(a < b for a, b in itertools.pairwise(budgets))
+        and (train.epochs is not None or all(float(b).is_integer() for b in budgets))
+    ):
+        unit = "epochs" if train.epochs is not None else "steps (whole numbers)"
+        raise ValueError(
+            f"{where}.extends is a list of increasing {unit} below {where}.{unit.split()[0]} "
+            f"({train.budget()!r}), got {train.extends!r}"
+        )
+    if train.extends and any(a.startswith(("--scheduler", "--use_policy_training_preset")) for a in train.extra_args):
+        raise ValueError(
+            f"{where}.extends needs the policy's own (constant) learning rate: a schedule set in extra_args may depend "
+            "on --steps, so a continued training would not be the same; drop extends or the scheduler flags"
+        )
+
+
+def check_extendable(method: MethodConfig, train: TrainSettings) -> None:
+    """A training that ``extends`` shorter ones continues them exactly only when its learning rate does not depend on
+    the budget: refused for a policy whose training preset has a schedule (LeRobot builds it from ``--steps``)."""
+    import lerobot.policies  # noqa: F401, PLC0415 - LeRobot's policy types (seconds), as check_policy imports them
+    from lerobot.configs.policies import PreTrainedConfig  # noqa: PLC0415
+
+    overrides = {k: v for k, v in method.policy.items() if k != "type"}
+    config = draccus.decode(PreTrainedConfig.get_choice_class(method.policy["type"]), {**overrides, "device": "cpu"})
+    scheduler = config.get_scheduler_preset()
+    if train.extends and scheduler is not None:
+        raise ValueError(
+            f"method {method.name!r}: train.extends needs a learning rate that does not depend on the budget, but "
+            f"policy type {method.policy['type']!r} trains with a {type(scheduler).__name__} schedule built from "
+            "--steps: train it in one run (drop extends)"
+        )
 
 
 def _positive_number(value: Any) -> bool:
@@ -650,6 +700,8 @@ class StudyConfig:
                 _check_train(self.train_for(method), f"method {method.name!r}: train")
         for method in self.trained_methods():  # last: importing LeRobot's policy configs takes seconds
             check_policy(method)
+            if self.train_for(method).extends:
+                check_extendable(method, self.train_for(method))
 
     def _validate_conditions(self) -> None:
         """Factors apply to every task and are varied in training; a family's conditions need its tasks."""

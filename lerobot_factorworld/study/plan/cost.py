@@ -122,7 +122,7 @@ def step_cost(step: Step, plan_index: dict[str, Step], model: dict[str, Any]) ->
         inputs = EvalInputs.from_dict(step.inputs)
         return _eval_cost(inputs, given_policy(step), inputs.environments, model)
     if step.kind == "train":  # the task's own dataset first (deps[0]), then other tasks' (extra_tasks)
-        collects = [CollectInputs.from_dict(plan_index[d].inputs) for d in step.deps]
+        collects = [CollectInputs.from_dict(plan_index[d].inputs) for d in step.deps if plan_index[d].kind == "collect"]
         return model["train"]["fixed_s"], _train_seconds(TrainInputs.from_dict(step.inputs), collects, model)
     collect = CollectInputs.from_dict(plan_index[step.deps[-1]].inputs)
     train = TrainInputs.from_dict(plan_index[step.deps[0]].inputs)
@@ -132,7 +132,12 @@ def step_cost(step: Step, plan_index: dict[str, Step], model: dict[str, Any]) ->
 def _train_seconds(train: TrainInputs, collects: list[CollectInputs], model: dict[str, Any]) -> float:
     """Seconds of a training's work on ``collects`` (the task's own dataset first, then other tasks' merged in)."""
     frames = [c.demos * expert_episode_steps(c.task) for c in collects]
-    steps = train.steps or train.epochs * epoch_frames(train, frames) / train.batch_size
+    done = train.extends or 0  # a training that continues a shorter one trains only the rest (and under a pass more)
+    steps = (
+        (train.steps - done)
+        if train.epochs is None
+        else (train.epochs - done) * epoch_frames(train, frames) / train.batch_size
+    )
     samples = steps * train.batch_size
     policy = train.policy
     seconds = samples * model["train"]["sample_s"].get(policy["type"], DEFAULT_SAMPLE_S)
@@ -256,6 +261,22 @@ def estimate(
     return out
 
 
+def _extension_lines(plan: Plan, todo: list[Step]) -> list[str]:
+    """The trainings that continue a shorter one (``train.extends``): what each trains, and whether it is to run."""
+    out = []
+    for step in plan.of_kind("train"):
+        inputs = TrainInputs.from_dict(step.inputs)
+        if inputs.extends is None:
+            continue
+        unit, budget = ("epochs", inputs.epochs) if inputs.epochs is not None else ("steps", inputs.steps)
+        state = "to run" if step in todo else "cached"
+        out.append(
+            f"  continues: {step.meta.get('method', '?')} {inputs.extends:g} -> {budget:g} {unit} (trains only the "
+            f"{budget - inputs.extends:g} new {unit}, from the last pass's end saved before {inputs.extends:g}; {state})"
+        )
+    return out
+
+
 def _work_seconds(plan: Plan, steps: list[Step], model: dict[str, Any]) -> float:
     index = {s.key: s for s in plan.steps}
     return sum(sum(step_cost(s, index, model)) for s in steps)
@@ -286,6 +307,7 @@ def describe(cfg: StudyConfig, plan: Plan, options: RunOptions) -> str:
             else ""
         )
     )
+    lines += _extension_lines(plan, todo)
     model = load_model()
     fitted = model.get("fitted_on", {})
     lines.append(
@@ -339,7 +361,7 @@ def fit_constants(plan: Plan, study_dir: str | Path) -> dict[str, Any]:
             units["collect"] += result["frames"]
         elif step.kind == "train":
             kind = TrainInputs.from_dict(step.inputs).policy["type"]
-            n = result["steps"] * TrainInputs.from_dict(step.inputs).batch_size
+            n = (result["steps"] - result.get("resumed_from", 0)) * TrainInputs.from_dict(step.inputs).batch_size
             samples.setdefault(kind, []).extend([variable, n])
         else:
             inputs = EvalInputs.from_dict(step.inputs)

@@ -101,10 +101,14 @@ def _method_steps(
         ]
         epochs_over = method.epochs_over if extras and method.epochs_over != OWN_FRAMES else None
         settings = cfg.train_for(method)
-        train = _train_step(settings, method.policy, seed, collect, labels, extras, epochs_over)
-        curve = [_curve_step(cfg, epochs, train, collect, labels) for epochs in settings.curve_epochs()]
+        chain = _train_chain(settings, method.policy, seed, collect, labels, extras, epochs_over)
+        train = chain[-1]
+        curve = [
+            _curve_step(cfg, epochs, _trained_past(chain, epochs), collect, labels)
+            for epochs in settings.curve_epochs()
+        ]
         evals = [_eval_step(cfg, c, train, collect, labels) for c in conditions]
-        return [*extras, train, *_stopped(cfg, evals), *curve]
+        return [*extras, *chain, *_stopped(cfg, evals), *curve]
     if seed != cfg.seeds[0]:
         return []
     env = CollectInputs.from_dict(collect.inputs).environments(method.obs)
@@ -152,6 +156,32 @@ def _extra_collect_step(cfg: StudyConfig, method: MethodConfig, task: str, colle
     return Step("collect", inputs.to_dict(), (), {**collect.meta, "task": task})
 
 
+def _train_chain(
+    t: TrainSettings,
+    policy: dict[str, Any],
+    seed: int,
+    collect: Step,
+    labels: dict,
+    extras: list[Step],
+    epochs_over: str | None,
+) -> list[Step]:
+    """The training steps of one method on one dataset: one, or (``train.extends``) one per budget, each after the
+    first continuing the one before it (its dependency); the last is the full budget's."""
+    chain: list[Step] = []
+    for budget in [*t.extends, None]:
+        settings = t if budget is None else t.at_budget(budget)
+        link = {} if budget is None else {"budget": budget}
+        prefix = chain[-1] if chain else None
+        chain.append(_train_step(settings, policy, seed, collect, {**labels, **link}, extras, epochs_over, prefix))
+    return chain
+
+
+def _trained_past(chain: list[Step], epochs: float) -> Step:
+    """The training of ``chain`` that saves the learning curve's checkpoint at ``epochs``: the first whose budget is
+    past it (the earlier points are the shorter trainings' own, with their keys)."""
+    return next(s for s in chain if epochs < s.inputs["epochs"])
+
+
 def _train_step(
     t: TrainSettings,
     policy: dict[str, Any],
@@ -160,10 +190,12 @@ def _train_step(
     labels: dict,
     extras: list[Step],
     epochs_over: str | None = None,
+    prefix: Step | None = None,
 ) -> Step:
     """Training of one method on one dataset (with ``extras``: merged with other tasks' datasets; the task's
     own comes first in ``deps``, and ``epochs_over`` says what an epoch counts); weight files enter the key by
-    content, not by location. ``t``: the method's settings (``StudyConfig.train_for``)."""
+    content, not by location. ``t``: the method's settings (``StudyConfig.train_for``); ``prefix``: the shorter
+    training this one continues (last in ``deps``, its budget as ``extends``: neither there without it)."""
     keyed = t.keyed()  # the settings' part of the key, as the config's check for duplicate methods reads it
     inputs = TrainInputs(
         policy=keyed_policy(policy),
@@ -171,9 +203,17 @@ def _train_step(
         **{**keyed, "extra_args": tuple(keyed_args(keyed["extra_args"]))},  # weight files by content
         versions=versions(),
         epochs_over=epochs_over,
+        extends=None if prefix is None else _budget(prefix),
     )
     run = {"policy": policy, "extra_args": list(t.extra_args)}
-    return Step("train", inputs.to_dict(), (collect.key, *(e.key for e in extras)), {**labels, RUN: run})
+    deps = (collect.key, *(e.key for e in extras), *((prefix.key,) if prefix else ()))
+    return Step("train", inputs.to_dict(), deps, {**labels, RUN: run})
+
+
+def _budget(train: Step) -> float:
+    """A training step's budget: its epochs, or its steps without epochs."""
+    inputs = train.inputs
+    return inputs["steps"] if inputs["epochs"] is None else inputs["epochs"]
 
 
 def _eval_step(cfg: StudyConfig, condition: str, train: Step, collect: Step, labels: dict) -> Step:

@@ -167,7 +167,7 @@ EPOCHS_OVER = (OWN_FRAMES, MERGED_FRAMES)
 class TrainInputs:
     """One ``lerobot-train`` run of a method on a dataset."""
 
-    OPTIONAL: ClassVar[frozenset[str]] = frozenset({"epochs_over", "curve_every"})
+    OPTIONAL: ClassVar[frozenset[str]] = frozenset({"epochs_over", "curve_every", "extends"})
 
     policy: Mapping[str, Any]  # path-like settings naming a file replaced by its content hash
     seed: int
@@ -180,6 +180,9 @@ class TrainInputs:
     versions: Mapping[str, str]
     epochs_over: str | None = None  # "merged", or None (the task's own frames; not in the key)
     curve_every: float | None = None  # epochs between the learning curve's checkpoints; None: no curve, not in the key
+    # The budget (epochs, or steps without epochs) of the shorter training this one continues (``train.extends``; its
+    # key is a dependency of this one's); None: trained from scratch, not in the key
+    extends: float | None = None
 
     def to_dict(self) -> dict[str, Any]:
         out = {f.name: getattr(self, f.name) for f in fields(self)}

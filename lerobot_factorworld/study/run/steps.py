@@ -48,6 +48,17 @@ from .checkpoint import GIVEN_CHECKPOINT, checkpoint_folder
 from .eval_env import eval_env_config
 from .inputs import MERGED_FRAMES, CollectInputs, EvalInputs, TrainInputs, whole_epochs
 from .recording import RECORD_SETTING, RECORDED_KEY, EpisodeRecorder, write_recorded
+from .train_state import (
+    CHECKPOINTS_DIR,
+    SAVES_ENV,
+    Saves,
+    clear_partial,
+    resume_args,
+    resume_point,
+    saved_steps,
+    saving,
+    step_of,
+)
 
 KINDS = ("collect", "train", "eval")
 STEP_FORMAT = 2  # bump when a step's meaning changes: every key changes with it (2: versions, content hashes)
@@ -474,6 +485,7 @@ def curve_checkpoint(train_folder: Path, saved_at: int) -> Path:
 def _run_train(step: Step, folder: Path, deps: list[Path]) -> dict[str, Any]:
     timings, execution = _current()
     datasets = [read_result(d) for d in deps if d.parent.name == "collect"]  # the task's own first
+    prefix = next((d / TRAIN_DIR for d in deps if d.parent.name == "train"), None)  # the training it extends
     data = datasets[0]
     inputs = TrainInputs.from_dict(step.inputs)
     require_device("train.device", inputs.device)
@@ -489,12 +501,14 @@ def _run_train(step: Step, folder: Path, deps: list[Path]) -> dict[str, Any]:
     if loaders and stores_video(Path(data["root"])):  # a lent loader reads PNG frames only (loader_args)
         loaders = 0
     out = folder / TRAIN_DIR
-    if out.exists():  # an interrupted run: LeRobot refuses an existing output_dir, start over
-        shutil.rmtree(out)
+    save_freq = min(curve.values(), default=steps)  # the curve's first checkpoint; then every as many
+    saves = Saves(steps, save_freq, str(out), inputs.batch_size, every_passes=step.run.get("save_every_passes", 1))
+    state = _starting_state(out, prefix, saves, curve)
+    start_step = step_of(state) if state is not None else 0
     cmd = [
         sys.executable,
         "-m",
-        "lerobot.scripts.lerobot_train",
+        "lerobot_factorworld.study.run.train_process",
         *policy_args(policy),
         f"--policy.device={inputs.device}",
         "--policy.push_to_hub=false",
@@ -504,31 +518,68 @@ def _run_train(step: Step, folder: Path, deps: list[Path]) -> dict[str, Any]:
         f"--batch_size={inputs.batch_size}",
         f"--seed={inputs.seed}",
         *loader_args(loaders),
-        f"--save_freq={min(curve.values(), default=steps)}",  # the curve's first checkpoint; then every as many
+        f"--save_freq={save_freq}",
         f"--log_freq={max(1, steps // 10)}",
         "--wandb.enable=false",
         f"--output_dir={out}",
         *extra_args,
+        *(resume_args(state) if state is not None else []),
     ]
     start = time.perf_counter()
     log_start = (folder / LOG_FILE).stat().st_size if (folder / LOG_FILE).is_file() else 0
-    if execution == "grouped":
-        _train_in_process(cmd[3:], folder, inputs.threads, timings)
-    else:
-        _train_subprocess(cmd, folder, inputs.threads)
-    checkpoint = out / CHECKPOINT
-    if not checkpoint.is_dir():
-        raise RuntimeError(f"lerobot-train finished without a checkpoint at {checkpoint}")
+    if start_step < steps:
+        if execution == "grouped":
+            _train_in_process(cmd[3:], folder, inputs.threads, timings, saves)
+        else:
+            _train_subprocess(cmd, folder, inputs.threads, saves)
+    _point_last_at(out, steps)
     with open(folder / LOG_FILE, "rb") as log:
         log.seek(log_start)
-        logged = train_log_seconds(log.read().decode(errors="replace"), steps)
+        logged = train_log_seconds(log.read().decode(errors="replace"), steps - start_step)
     timings.update(logged)
     # what is left: process start and imports (subprocess), dataset and policy set-up, checkpoint saving
     timings.add("startup_save", time.perf_counter() - start - sum(logged.values()) - timings.seconds.get("imports", 0))
-    result = {"checkpoint": str(checkpoint), "steps": steps}
-    if curve:
-        result["curve"] = curve
+    result = {"checkpoint": str(out / CHECKPOINT), "steps": steps}
+    own = {epochs: at for epochs, at in curve.items() if inputs.extends is None or float(epochs) >= inputs.extends}
+    if own:  # an extension's earlier points are the prefix's (its evaluations depend on the prefix)
+        result["curve"] = own
+    if start_step:  # trained from this saved step on: after a kill, or from the training it extends
+        result["resumed_from"] = start_step
+    if prefix is not None:
+        result["extends"] = prefix.parent.name
     return result
+
+
+def _starting_state(out: Path, prefix: Path | None, saves: Saves, curve: dict[str, int]) -> Path | None:
+    """The saved state a training continues from: its own newest (a rerun after a kill), else the newest of the
+    training it extends; ``None``: from scratch, in an emptied folder. A prefix's state that is one of this training's
+    own checkpoints (a curve point or its last at a pass's end) is copied in, as it would have saved it."""
+    clear_partial(out)
+    own = resume_point(out, saves)
+    theirs = resume_point(prefix, saves) if prefix is not None else None
+    if own is not None and (theirs is None or step_of(own) >= step_of(theirs)):
+        return own
+    if out.exists():  # nothing of its own to continue from: LeRobot refuses an existing output_dir, start over
+        shutil.rmtree(out)
+    if theirs is not None and (step_of(theirs) in curve.values() or step_of(theirs) == saves.steps):
+        shutil.copytree(theirs, out / CHECKPOINTS_DIR / theirs.name, symlinks=True)
+        return out / CHECKPOINTS_DIR / theirs.name
+    return theirs
+
+
+def _point_last_at(out: Path, steps: int) -> Path:
+    """``checkpoints/last`` pointed at the training's last save (a kill may have come between the save and LeRobot's
+    pointing): the folder it names."""
+    final = saved_steps(out).get(steps)
+    if final is None:
+        raise RuntimeError(f"lerobot-train finished without a checkpoint of step {steps} in {out / CHECKPOINTS_DIR}")
+    last = out / CHECKPOINTS_DIR / "last"
+    if last.is_symlink() or last.exists():
+        if last.resolve() == final.resolve():
+            return last
+        last.unlink()
+    last.symlink_to(final.name)
+    return last
 
 
 def loader_args(workers: int) -> list[str]:
@@ -556,10 +607,11 @@ def _merged_training_data(datasets: list[dict[str, Any]], folder: Path, key: str
     return {"repo_id": repo_id, "root": str(root), "frames": frames}
 
 
-def _train_subprocess(cmd: list[str], folder: Path, threads: int) -> None:
-    """``lerobot-train`` in a new Python process (the ``per_step`` execution)."""
+def _train_subprocess(cmd: list[str], folder: Path, threads: int, saves: Saves) -> None:
+    """``lerobot-train`` in a new Python process (the ``per_step`` execution), saving as ``saves`` say."""
     n = str(threads)
     env = {**os.environ, "OMP_NUM_THREADS": n, "MKL_NUM_THREADS": n, "TOKENIZERS_PARALLELISM": "false"}
+    env[SAVES_ENV] = saves.to_json()
     with open(folder / LOG_FILE, "a") as log:
         log.write(" ".join(cmd) + "\n")
         log.flush()
@@ -569,15 +621,16 @@ def _train_subprocess(cmd: list[str], folder: Path, threads: int) -> None:
         raise RuntimeError(f"lerobot-train failed (exit {proc.returncode}); log {folder / LOG_FILE}:\n{tail}")
 
 
-def _train_in_process(args: list[str], folder: Path, threads: int, timings: Timings) -> None:
-    """``lerobot-train`` with ``args`` in this (persistent worker) process: no interpreter start and no
-    imports per run, and a checkpoint byte-identical to the subprocess's (``scripts/bench_study.py`` checks)."""
+def _train_in_process(args: list[str], folder: Path, threads: int, timings: Timings, saves: Saves) -> None:
+    """``lerobot-train`` with ``args`` in this (persistent worker) process, saving as ``saves`` say: no interpreter
+    start and no imports per run, and a checkpoint byte-identical to the subprocess's (``scripts/bench_study.py``
+    checks)."""
     with timings.span("imports"):
         from lerobot.scripts import lerobot_train  # noqa: PLC0415 - LeRobot's training stack (seconds, once)
 
     print("lerobot-train (in process) " + " ".join(args), flush=True)
     try:
-        with as_lerobot_process("lerobot-train", args, folder, threads), warnings.catch_warnings():
+        with as_lerobot_process("lerobot-train", args, folder, threads), saving(saves), warnings.catch_warnings():
             # A lent loader (loader_args) forks this worker, whose renderer and arrow threads sit idle meanwhile:
             # its children only read PNG frames from parquet, so Python's warning about forking with threads is
             # noise here.

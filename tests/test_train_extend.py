@@ -1,0 +1,119 @@
+"""A finished training grows (``train.extends``): 10 epochs continued to 20 give the checkpoint files of 20 epochs
+trained in one run, the continued training trains only from the 10-epoch training's last saved pass, its key holds
+the training it continues, and a learning curve's earlier points keep the shorter training's evaluation keys."""
+
+from __future__ import annotations
+
+import shutil
+from pathlib import Path
+
+import pytest
+
+from lerobot_factorworld.core.settings import parse_config
+from lerobot_factorworld.study.plan.command import StudyCommand
+from lerobot_factorworld.study.plan.cost import describe, step_cost
+from lerobot_factorworld.study.plan.grid import CURVE_EPOCHS, make_plan
+from lerobot_factorworld.study.run.options import RunOptions
+
+TOY = """
+name: extend
+out_dir: {out}
+tasks: [handle-press]
+n_train_envs: [1]
+seeds: [0]
+train_factors: [light]
+factors: []
+methods:
+  - name: bc
+    policy: {{type: bc}}
+collect:
+  demos: 2
+  max_episode_steps: 60
+  image_size: 48
+train:
+  epochs: {epochs}
+  batch_size: 8
+  curve_every: 5
+  extends: {extends}
+eval:
+  n_test_envs: 1
+  episodes: 1
+  max_episode_steps: 8
+  record_episodes: 0
+workers: 1
+"""
+
+
+def _command(folder: Path, epochs: float = 20, extends: str = "[10]", name: str = "study") -> StudyCommand:
+    folder.mkdir(parents=True, exist_ok=True)
+    path = folder / f"{name}.yaml"
+    path.write_text(TOY.format(out=folder / name, epochs=epochs, extends=extends))
+    return parse_config(StudyCommand, [f"--config_path={path}"], "study")
+
+
+def test_a_continued_training_is_keyed_by_the_one_it_continues_and_costs_only_its_new_epochs(tmp_path):
+    cfg = _command(tmp_path).grid()
+    plan = make_plan(cfg)
+    short, long = plan.of_kind("train")
+    assert (short.inputs["epochs"], long.inputs["epochs"], long.inputs["extends"]) == (10, 20, 10)
+    assert "extends" not in short.inputs and long.deps[-1] == short.key  # the first link: a plain 10-epoch training
+    plain = make_plan(_command(tmp_path, epochs=10, extends="[]", name="plain").grid())
+    assert short.key == plain.of_kind("train")[0].key  # the same key as 10 epochs trained by any study
+    scratch = make_plan(_command(tmp_path, extends="[]", name="scratch").grid()).of_kind("train")[0]
+    assert "extends" not in scratch.inputs and scratch.key != long.key
+    # the curve's 5-epoch point is the 10-epoch training's (its key), 10 and 15 the continued one's
+    by_epochs = {s.meta[CURVE_EPOCHS]: s for s in plan.curve_points()}
+    assert {e: s.deps[0] for e, s in by_epochs.items()} == {5: short.key, 10: long.key, 15: long.key}
+    assert by_epochs[5].key == plain.curve_points()[0].key
+    index = {s.key: s for s in plan.steps}
+    model = {"train": {"fixed_s": 0.0, "sample_s": {"bc": 1.0}}}
+    scratch_index = {s.key: s for s in make_plan(_command(tmp_path, extends="[]", name="scratch").grid()).steps}
+    assert step_cost(long, index, model)[1] == pytest.approx(step_cost(scratch, scratch_index, model)[1] / 2)
+    text = describe(cfg, plan, RunOptions(dry_run=True))
+    assert "continues: bc 10 -> 20 epochs (trains only the 10 new epochs" in text and "to run)" in text
+
+
+@pytest.mark.parametrize(
+    ("extends", "message"),
+    [("[10, 5]", "increasing epochs below train.epochs"), ("[20]", "increasing epochs"), ("[0]", "increasing")],
+)
+def test_bad_budgets_to_continue_are_refused_in_one_line(tmp_path, extends, message):
+    with pytest.raises(ValueError, match=message):
+        _command(tmp_path, extends=extends).grid()
+
+
+@pytest.mark.slow
+def test_ten_epochs_continued_to_twenty_give_the_checkpoint_files_of_twenty_from_scratch(tmp_path):
+    import json
+
+    from lerobot_factorworld.study.runner import run_study
+
+    scratch = _command(tmp_path, extends="[]", name="scratch")
+    outcome = run_study(*scratch.parts(), command="scratch")
+    assert not outcome.failed, outcome.failed
+    grown = _command(tmp_path, name="grown")
+    shutil.copytree(tmp_path / "scratch" / "steps" / "collect", tmp_path / "grown" / "steps" / "collect")
+    outcome = run_study(*grown.parts(), command="grown")
+    assert not outcome.failed, outcome.failed
+    assert outcome.ran == {"collect": 0, "train": 2, "eval": 4}
+    short, long = make_plan(grown.grid()).of_kind("train")
+    (plain,) = make_plan(scratch.grid()).of_kind("train")
+    result = json.loads((long.folder(grown.grid().out_dir) / "result.json").read_text())
+    # 51 frames in batches of 8: a pass is 7 steps; 10 epochs are 64 steps, so it continues from 63
+    assert (result["steps"], result["resumed_from"], result["extends"]) == (128, 63, short.key)
+    assert result["curve"] == {"10": 64, "15": 96}  # its own points; 5 epochs is the shorter training's
+    checkpoints = {
+        step: long.folder(grown.grid().out_dir) / "train" / "checkpoints" / f"{step:06d}" for step in (64, 96, 128)
+    }
+    checkpoints[32] = short.folder(grown.grid().out_dir) / "train" / "checkpoints" / "000032"
+    for step, mine in checkpoints.items():
+        theirs = plain.folder(scratch.grid().out_dir) / "train" / "checkpoints" / f"{step:06d}"
+        files = sorted(p.relative_to(theirs) for p in theirs.rglob("*") if p.is_file())
+        assert files == sorted(p.relative_to(mine) for p in mine.rglob("*") if p.is_file()) and len(files) >= 8
+        for name in files:
+            a, b = (theirs / name).read_bytes(), (mine / name).read_bytes()
+            if name.name == "train_config.json" and step != 32:  # names its folder; 32's also its own steps
+                a = a.replace(str(theirs.parents[2]).encode(), str(mine.parents[2]).encode())
+                a = a.replace(str(tmp_path / "scratch").encode(), str(tmp_path / "grown").encode())
+            if name.name != "train_config.json" or step != 32:
+                assert a == b, f"{name} of step {step} differs"

@@ -1,0 +1,177 @@
+"""A study's training survives a kill: killed with kill -9 at a random point (the study's process group, or the Ray
+worker that trains), the same ``factorworld study`` command resumes it from its last saved state, and its final
+checkpoint's files are those of an uninterrupted run, byte for byte (``study/run/train_state.py``)."""
+
+from __future__ import annotations
+
+import json
+import os
+import random
+import shutil
+import signal
+import subprocess
+import sys
+import time
+from collections.abc import Callable
+from pathlib import Path
+
+import pytest
+
+TOY = """
+name: resume
+out_dir: {out}
+tasks: [handle-press]
+n_train_envs: [1]
+seeds: [0]
+train_factors: [light]
+factors: []
+methods:
+  - name: bc
+    policy: {{type: bc}}
+collect:
+  demos: 2
+  max_episode_steps: 60
+  image_size: 48
+train:
+  epochs: 40
+  batch_size: 8
+eval:
+  n_test_envs: 1
+  episodes: 1
+  max_episode_steps: 8
+  record_episodes: 0
+executor: {executor}
+workers: 1
+"""
+# Both tests read one uninterrupted run (a module fixture): one xdist worker runs them, one after the other.
+pytestmark = pytest.mark.xdist_group("train_resume")
+PASS_STEPS = 7  # ceil(51 frames / 8): the toy's two demos hold 51 frames
+STEPS = 255  # ceil(40 epochs * 51 / 8)
+
+
+def _config(folder: Path, executor: str = "local") -> Path:
+    folder.mkdir(parents=True, exist_ok=True)
+    path = folder / "resume.yaml"
+    path.write_text(TOY.format(out=folder / "study", executor=executor))
+    return path
+
+
+def _study(config: Path) -> list[str]:
+    return [sys.executable, "-m", "lerobot_factorworld.cli", "study", f"--config_path={config}"]
+
+
+def _train_folder(study: Path) -> Path:
+    (folder,) = (study / "steps" / "train").iterdir()
+    return folder
+
+
+def _saved(study: Path) -> list[int]:
+    checkpoints = study / "steps" / "train"
+    return sorted(int(d.name) for d in checkpoints.glob("*/train/checkpoints/*") if d.name.isdigit())
+
+
+@pytest.fixture(scope="module")
+def uninterrupted(tmp_path_factory) -> Path:
+    """The toy study run once without interruption: its study folder (the reference every resumed run must equal)."""
+    config = _config(tmp_path_factory.mktemp("uninterrupted"))
+    subprocess.run(_study(config), check=True, capture_output=True, timeout=600)
+    return config.parent / "study"
+
+
+def _copy_collection(reference: Path, study: Path) -> None:
+    """The reference's collected dataset into ``study`` (the same step key): only the training is run again."""
+    shutil.copytree(reference / "steps" / "collect", study / "steps" / "collect", symlinks=True)
+
+
+def _kill_at_random_save(start: Callable[[], subprocess.Popen], study: Path, kill: Callable[[subprocess.Popen], None]):
+    """Start the study and kill it (``kill``) once the training has saved past a random pass's end (the save after
+    it may be half written); returns what was killed when, for the failure messages, and the study's exit status."""
+    seed = random.randrange(10**6)
+    target = random.Random(seed).randrange(2, STEPS // PASS_STEPS - 2) * PASS_STEPS
+    proc = start()
+    deadline = time.time() + 300
+    while time.time() < deadline and not any(step >= target for step in _saved(study)) and proc.poll() is None:
+        time.sleep(0.005)
+    kill(proc)
+    status = proc.wait()
+    assert not (_train_folder(study) / "result.json").exists(), f"the kill (seed {seed}) should land mid-training"
+    return f"killed after step {target} (seed {seed}), saves {_saved(study)}", status
+
+
+def _same_checkpoints(study: Path, reference: Path, why: str) -> None:
+    """The final checkpoint's files (weights, processors, optimizer, RNG, step) equal the reference's byte for byte;
+    ``train_config.json`` names the study folder, so it is compared with the reference's folder in its place."""
+    mine = _train_folder(study) / "train" / "checkpoints" / f"{STEPS:06d}"
+    theirs = _train_folder(reference) / "train" / "checkpoints" / f"{STEPS:06d}"
+    files = sorted(p.relative_to(theirs) for p in theirs.rglob("*") if p.is_file())
+    assert files == sorted(p.relative_to(mine) for p in mine.rglob("*") if p.is_file()), why
+    assert len(files) >= 8, files
+    for name in files:
+        a, b = (theirs / name).read_bytes(), (mine / name).read_bytes()
+        if name.name == "train_config.json":
+            a = a.replace(str(reference).encode(), str(study).encode())
+        assert a == b, f"{name} differs; {why}"
+
+
+def _kill_group(proc: subprocess.Popen) -> None:
+    os.killpg(proc.pid, signal.SIGKILL)
+
+
+@pytest.mark.slow
+def test_a_study_killed_mid_training_resumes_and_ends_with_the_uninterrupted_checkpoint(uninterrupted, tmp_path):
+    config = _config(tmp_path)
+    study = config.parent / "study"
+    _copy_collection(uninterrupted, study)
+
+    def start() -> subprocess.Popen:
+        return subprocess.Popen(
+            _study(config), stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True
+        )
+
+    why, status = _kill_at_random_save(start, study, _kill_group)
+    assert status == -signal.SIGKILL
+    subprocess.run(_study(config), check=True, capture_output=True, timeout=600)
+    result = json.loads((_train_folder(study) / "result.json").read_text())
+    assert result["resumed_from"] > 0 and result["resumed_from"] % PASS_STEPS == 0, why
+    assert "Resuming data order at epoch" in (_train_folder(study) / "log.txt").read_text()
+    _same_checkpoints(study, uninterrupted, why)
+    # the saves only a rerun needed are gone: the curve-less training keeps its last and the newest pass's end
+    assert _saved(study) == [STEPS // PASS_STEPS * PASS_STEPS, STEPS], why
+
+
+def _ray_training_workers() -> list[int]:
+    """Processes running a Ray task of the study (Ray names them after the task's function)."""
+    found = []
+    for proc in Path("/proc").iterdir():
+        if proc.name.isdigit():
+            try:
+                if (proc / "cmdline").read_bytes().startswith(b"ray::run_steps"):
+                    found.append(int(proc.name))
+            except OSError:
+                continue
+    return found
+
+
+@pytest.mark.slow
+def test_a_ray_worker_lost_mid_training_is_resumed_by_the_rerun(uninterrupted, tmp_path):
+    pytest.importorskip("ray")
+    config = _config(tmp_path, executor="ray")
+    study = config.parent / "study"
+    _copy_collection(uninterrupted, study)
+    log = tmp_path / "first_run.txt"
+
+    def start() -> subprocess.Popen:
+        return subprocess.Popen(_study(config), stdout=log.open("w"), stderr=subprocess.STDOUT, start_new_session=True)
+
+    def lose_the_worker(proc: subprocess.Popen) -> None:
+        workers = _ray_training_workers()
+        assert workers, "no Ray worker is training"
+        for pid in workers:
+            os.kill(pid, signal.SIGKILL)
+
+    why, status = _kill_at_random_save(start, study, lose_the_worker)
+    assert status == 1 and "failed: train" in log.read_text(), log.read_text()[-2000:]  # the study saw it lost
+    subprocess.run(_study(config), check=True, capture_output=True, timeout=600)
+    result = json.loads((_train_folder(study) / "result.json").read_text())
+    assert result["resumed_from"] > 0, why
+    _same_checkpoints(study, uninterrupted, why)
