@@ -143,6 +143,19 @@ def test_a_finding_over_two_studies_that_share_cells_is_corrected_once_on_the_sa
     assert b_shrink.studies == ("a", "b") and b_other.studies == ("b",)
     (alone,) = decide([SHRINKS], small, rows_b)
     assert alone.comparisons[0].cells < b_shrink.comparisons[0].cells  # B alone has half the cells
+    # a study sharing only some of A's cells (door-open) and adding its own (bin-picking) tests another comparison:
+    # each keeps its own cells, and the correction counts both
+    third_task = StudyConfig(name="c", tasks=["door-open", "bin-picking"], seeds=list(SEEDS), factors=ALL,
+                             methods=big.methods)  # fmt: skip
+    rows_c = [dict(r, study="c") for r in rows_a if r["task"] == "door-open"]
+    rows_c += [dict(r, study="c") for m in ("base", "treat") for r in _arm(m, 0.9, 0.3, task="bin-picking")]
+    (a_again,), (c_shrink,) = decide_together([([SHRINKS], big, rows_a), ([SHRINKS], third_task, rows_c)])
+    assert a_again.corrected_over == c_shrink.corrected_over == 2 and c_shrink.studies == ("c",)
+    (c_alone,) = decide([SHRINKS], third_task, rows_c)
+    assert (c_shrink.comparisons[0].point, c_shrink.comparisons[0].cells) == (
+        c_alone.comparisons[0].point,
+        c_alone.comparisons[0].cells,
+    )
 
 
 def test_a_capped_comparison_leaning_the_other_way_is_not_resolved_and_says_which_way():

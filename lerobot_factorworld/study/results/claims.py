@@ -511,9 +511,10 @@ def _cell_label(row: dict) -> tuple:
 
 
 def _claim_groups(parts: Sequence[_Part]) -> dict[tuple[int, int], tuple[int, list[dict], tuple[str, ...]]]:
-    """(part, claim) -> (group, rows, studies). A group is one (method, baseline, task) in the studies that share a
-    cell of it (the same evaluation step), so a comparison two studies share is decided once, on the union of
-    their cells (the first study's row where both have a cell of the same label)."""
+    """(part, claim) -> (group, rows, studies). A group is one (method, baseline, task) in the studies whose cells of
+    it are all cells of another's (the same evaluation steps: a study that re-reports part of another's grid), so
+    that comparison is decided once, on the larger study's cells. Two studies that share only some cells (each has
+    cells the other lacks) test different comparisons and keep their own."""
     claims = []  # (part, claim, (method, baseline, task), its rows, their evaluation steps)
     for i, part in enumerate(parts):
         default = part.cfg.methods[0].name
@@ -530,14 +531,14 @@ def _claim_groups(parts: Sequence[_Part]) -> dict[tuple[int, int], tuple[int, li
 
     for x, (i, _, who, _, steps) in enumerate(claims):
         for y, (k, _, other, _, other_steps) in enumerate(claims[:x]):
-            if other == who and (i == k or steps & other_steps):
+            if other == who and (i == k or (steps and other_steps and (steps <= other_steps or other_steps <= steps))):
                 group[root(x)] = root(y)
     out = {}
     for x, (i, j, *_) in enumerate(claims):
         members = [c for y, c in enumerate(claims) if root(y) == root(x)]
         seen: set = set()
         rows = []
-        for member in sorted(members, key=lambda c: c[0]):  # studies in order: the first's row of a label wins
+        for member in sorted(members, key=lambda c: -len(c[3])):  # the largest study's cells, then any it lacks
             for row in member[3]:
                 if _cell_label(row) not in seen:
                     seen.add(_cell_label(row))
