@@ -112,7 +112,7 @@ def claims_section(verdicts: Sequence[ClaimVerdict], finding: str = "", others: 
     m = verdicts[0].corrected_over
     scope = (
         f"the {m} comparisons of finding {finding} over its studies here and beside this one ({', '.join(others)}), "
-        "a comparison two of them share counted once and decided on their shared cells"
+        "a comparison one of them re-reports from another's cells counted once and decided on the larger's cells"
         if others
         else f"the {m} comparisons of this study"
     )
@@ -150,7 +150,7 @@ def claims_section(verdicts: Sequence[ClaimVerdict], finding: str = "", others: 
     if borrowed:
         lines.append("")
         lines += [
-            f"- *{v.claim.text}* is decided on the cells of {', '.join(v.studies)} (the cells they share once), "
+            f"- *{v.claim.text}* is decided once for {', '.join(v.studies)}, on the larger study's cells, "
             f"{v.comparisons[0].cells if v.comparisons else 0} cells in all."
             for v in borrowed
         ]
