@@ -298,7 +298,9 @@ def test_methods_are_set_against_the_first_per_factor_and_group():
         ],
     )
     text = "\n".join(_methods_section(cfg, rows))
-    assert "## Methods against none" in text and "| shift | spatial | +0.375 | +0.175 | -0.200 | [" in text
+    assert (
+        "## Methods against none" in text and "| shift | spatial | 6 | +0.375 | +0.175 | -0.200 | [" in text
+    )  # 6 cells
     assert "| shift | textures |" not in text  # no texture factor in this study
 
 

@@ -41,6 +41,7 @@ from ..results.aggregate import (
     per_task_success,
     radius_rows,
     radius_slopes,
+    shared_cell_count,
     stage_counts,
     success_per_condition_and_n,
     summary,
@@ -298,7 +299,8 @@ def _ordering_section(cfg: StudyConfig, rows: list[dict], verdicts: list[ClaimVe
     for other, (own, diff) in method_rho_differences(rows, trained, cfg.factors, PAPER_FACTOR_RANKS).items():
         lines.append(
             f"{other}'s ordering: Spearman {own[0]:+.2f} {ci(*own[1:], digits=2)} with the paper's, {diff[0]:+.2f} "
-            f"{ci(*diff[1:], digits=2)} against {method}'s (bootstrap; one resampling of both)."
+            f"{ci(*diff[1:], digits=2)} against {method}'s (bootstrap; one resampling of both, on the "
+            f"{shared_cell_count(rows, [method, other])} cells (task, N, seed, condition) both have)."
         )
     sentence = ordering_sentence(verdicts)
     if sentence:
@@ -513,18 +515,22 @@ def _methods_section(cfg: StudyConfig, rows: list[dict]) -> list[str]:
         f"Each method's mean gap next to {base}'s on the same conditions, and the difference (negative: the method "
         f"shrinks the gap), each with its 95% bootstrap interval. Groups of factors are section 5.2's: "
         + "; ".join(f"{name} = {', '.join(group)}" for name, group in PAPER_FACTOR_GROUPS.items())
-        + f". A method run on part of {base}'s grid (a study made in parts) is compared on the tasks, N and seeds "
-        "both have. A method with a lower P_T has less gap to lose: read the difference with its success rates below.",
+        + f". Each method is compared with {base} on the cells (task, N, seed, condition) both have (*cells*: how "
+        "many, of both methods' train and shifted conditions). A method with a lower P_T has less gap to lose: read "
+        "the difference with its success rates below.",
         "",
-        f"| method | factors | gap of {base} | gap of the method | difference | 95% interval |",
-        "|---|---|---|---|---|---|",
+        f"| method | factors | cells | gap of {base} | gap of the method | difference | 95% interval |",
+        "|---|---|---|---|---|---|---|",
     ]
+    grid = [r for r in rows if r["condition"] in (TRAIN_SUITE, *labels[ALL_FACTORS])]
     for method in methods[1:]:
+        shared = shared_cell_count(grid, [base, method])
         for label in labels:
             if (method, label) in found:
                 base_gap, gap, diff = found[(method, label)]
                 lines.append(
-                    f"| {method} | {label} | {base_gap[0]:+.3f} | {gap[0]:+.3f} | {diff[0]:+.3f} | {ci(*diff[1:])} |"
+                    f"| {method} | {label} | {shared} | {base_gap[0]:+.3f} | {gap[0]:+.3f} | {diff[0]:+.3f} | "
+                    f"{ci(*diff[1:])} |"
                 )
     lines.append("")
     return lines
