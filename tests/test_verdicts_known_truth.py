@@ -21,6 +21,7 @@ import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
+from scipy import stats
 from test_claims import _row, rows_of
 
 from lerobot_factorworld import cli
@@ -317,3 +318,89 @@ def test_the_quick_reports_from_a_results_file_where_every_episode_fails(tmp_pat
     cli.main(["report", f"--results={results}"])
     report = (tmp_path / "report.md").read_text()
     assert "## The paper's claims" in report and (tmp_path / "report.html").is_file()
+
+
+# --- the rules' edges (what mutation testing of claims.py asks of them) -------------------------------------------
+
+
+def test_a_p_t_that_falls_without_forcing_the_sign_still_confounds_and_a_resolved_p_f_rise_clears_it():
+    """P_T 0.95 -> 0.70 stays above the baseline's gap (0.50), so the sign is free; the gap shrinks -0.50 -> -0.30.
+    With P_F 0.45 -> 0.40 the fall alone confounds it; with P_T 0.95 -> 0.85 and P_F 0.45 -> 0.70 (resolved higher)
+    it agrees though P_T fell."""
+    verdict, d = _shrink((0.95, 0.45), (0.70, 0.40))
+    assert not d.forced and d.p_t_change[2] < 0 and d.high < 0
+    assert verdict.verdict == CONFOUNDED
+    verdict, d = _shrink((0.95, 0.45), (0.85, 0.70))
+    assert not d.forced and d.p_t_change[2] < 0 < d.p_f_change[1]
+    assert verdict.verdict == AGREES
+
+
+def test_a_shrinks_success_changes_are_the_treatments_minus_the_baselines_at_the_comparisons_level():
+    """Their points are the mean P_T (and P_F) differences; their intervals the hull of the bootstrap's and the
+    t-interval at the comparison's level, or with one seed the bootstrap's alone."""
+    base, treat = _arm("base", 0.9, 0.5), _arm("treat", 0.7, 0.6)
+    rows = base + treat
+    (verdict,) = decide([SHRINKS], _two_methods(), rows)
+    d = verdict.comparisons[0]
+    mean = lambda m, cond: np.mean([r["success_rate"] for r in rows if r["method"] == m and cond(r["condition"])])  # noqa: E731
+    assert d.p_t_change[0] == pytest.approx(
+        mean("treat", lambda c: c == "train") - mean("base", lambda c: c == "train")
+    )
+    assert d.p_f_change[0] == pytest.approx(
+        mean("treat", lambda c: c != "train") - mean("base", lambda c: c != "train")
+    )
+    per_seed = [np.mean([r["success_rate"] for r in treat if r["seed"] == s and r["condition"] == "train"])
+                - np.mean([r["success_rate"] for r in base if r["seed"] == s and r["condition"] == "train"]) for s in SEEDS]  # fmt: skip
+    half = stats.t.ppf(1 - (1 - d.level) / 2, df=4) * np.std(per_seed, ddof=1) / math.sqrt(5)
+    assert d.p_t_change[1] <= np.mean(per_seed) - half + 1e-12 and d.p_t_change[2] >= np.mean(per_seed) + half - 1e-12
+    one = [r for r in rows if r["seed"] == 0]
+    (alone,) = decide([SHRINKS], _two_methods(), one)
+    low, high = alone.comparisons[0].p_t_change[1:]
+    assert np.isfinite(low) and np.isfinite(high) and low < alone.comparisons[0].p_t_change[0] < high
+
+
+def test_headroom_on_both_sides_is_the_room_each_bound_leaves():
+    """A shrink's headroom is the baseline's gap and its contrary room the treatment's P_T minus that gap; an
+    exceeds claim's headroom is P_T minus the second factor's gap, its contrary room the second's gap plus 1 - P_T;
+    a gap's contrary room is 1 - P_T. Only a comparison between two methods that shrinks carries success changes."""
+    from lerobot_factorworld.study.results.claims import comparisons
+
+    rows = _arm("base", 0.9, 0.5, spread=0.0) + _arm("treat", 0.7, 0.6, spread=0.0)
+    (shrink,) = comparisons(SHRINKS, _two_methods(), rows)
+    assert (shrink.headroom, shrink.contrary) == pytest.approx((0.4, 0.7 - 0.4)) and shrink.success is not None
+    cfg = StudyConfig(name="known", tasks=["door-open"], seeds=list(SEEDS), factors=ALL,
+                      methods=[MethodConfig("base", {"type": "bc"})])  # fmt: skip
+    one = rows_of({"camera_pos": 0.5, "light": 0.8}, train=0.9)
+    exceeds = ClaimConfig(kind="gap_exceeds", text="t", source="t", factors=["camera_pos", "light"])
+    (c,) = comparisons(exceeds, cfg, [dict(r, method="base") for r in one])
+    assert (c.headroom, c.contrary) == pytest.approx((0.9 - 0.1, 0.1 + 1 - 0.9)) and c.success is None
+    opens = ClaimConfig(kind="gap_opens", text="t", source="t", factors=["camera_pos"])
+    (g,) = comparisons(opens, cfg, [dict(r, method="base") for r in one])
+    assert g.contrary == pytest.approx(1 - 0.9)
+    trend = ClaimConfig(kind="trend", text="t", source="t", factors=ALL, over="n", direction="shrinks")
+    two_n = StudyConfig(name="known", tasks=["door-open"], n_train_envs=[5, 10], seeds=list(SEEDS), factors=ALL,
+                        methods=[MethodConfig("bc", {"type": "bc"})])  # fmt: skip
+    at5, at10 = _arm("bc", 0.9, 0.5, spread=0.0), _arm("bc", 0.6, 0.4, spread=0.0)
+    for r in at10:
+        r["n_train_envs"] = 10
+    other_task = [dict(r, task="pick-place") for r in _arm("bc", 0.9, 0.9, spread=0.0)]  # only at N = 5: left out
+    (t,) = comparisons(trend, two_n, at5 + at10 + other_task)
+    assert (t.headroom, t.contrary) == pytest.approx((0.4, 0.6 - 0.4)) and t.success is not None
+    assert int(np.sum(~np.isnan(t.table.rates))) == 2 * 3 * 5  # both N of door-open: pick-place has no N = 10
+
+
+def test_a_capped_comparison_that_does_not_lean_the_other_way_or_has_no_room_there_stays_capped():
+    """At P_T 0.30 the paper's way is capped. An estimate on the paper's side, or exactly 0, stays capped; one that
+    leans the other way stays capped when the room there (contrary) is below what the design resolves."""
+    from lerobot_factorworld.study.results.claims import Comparison, _uncapped_the_other_way
+
+    def comparison(contrary: float) -> Comparison:
+        return Comparison("c", None, None, 0.0, +1, 0.05, lambda e, z: 0.2, contrary)
+
+    assert _uncapped_the_other_way(comparison(0.9), -0.1, 0.2)  # leans, with room
+    assert not _uncapped_the_other_way(comparison(0.9), +0.1, 0.2)  # the paper's side
+    assert not _uncapped_the_other_way(comparison(0.9), 0.0, 0.2)  # on the threshold
+    assert not _uncapped_the_other_way(comparison(0.1), -0.1, 0.2)  # leans, but no room the design resolves
+    assert _uncapped_the_other_way(comparison(0.2), -0.1, 0.2)  # room exactly what it resolves
+    assert _uncapped_the_other_way(comparison(math.nan), -0.1, 0.2)  # unbounded room
+    assert not _uncapped_the_other_way(comparison(0.9), -0.1, math.nan)  # nothing resolvable at all
