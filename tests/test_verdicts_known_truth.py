@@ -333,6 +333,9 @@ def test_a_p_t_that_falls_without_forcing_the_sign_still_confounds_and_a_resolve
     verdict, d = _shrink((0.95, 0.45), (0.85, 0.70))
     assert not d.forced and d.p_t_change[2] < 0 < d.p_f_change[1]
     assert verdict.verdict == AGREES
+    # P_F unchanged (its interval holds 0 inside): P_F is not resolved higher, so the fall confounds it
+    verdict, d = _shrink((0.95, 0.45), (0.75, 0.45))
+    assert d.p_f_change[1] < 0 < d.p_f_change[2] and not d.forced and verdict.verdict == CONFOUNDED
 
 
 def test_a_shrinks_success_changes_are_the_treatments_minus_the_baselines_at_the_comparisons_level():
@@ -404,3 +407,5 @@ def test_a_capped_comparison_that_does_not_lean_the_other_way_or_has_no_room_the
     assert _uncapped_the_other_way(comparison(0.2), -0.1, 0.2)  # room exactly what it resolves
     assert _uncapped_the_other_way(comparison(math.nan), -0.1, 0.2)  # unbounded room
     assert not _uncapped_the_other_way(comparison(0.9), -0.1, math.nan)  # nothing resolvable at all
+    band = Comparison("c", None, None, 0.06, +1, 0.05, lambda e, z: 0.2, 0.9)  # a threshold that is not 0
+    assert _uncapped_the_other_way(band, 0.03, 0.2) and not _uncapped_the_other_way(band, 0.09, 0.2)

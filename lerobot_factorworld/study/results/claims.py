@@ -384,14 +384,20 @@ class _Evidence:
 
 
 def _evidence(c: Comparison) -> _Evidence:
-    point, reps = c.table.bootstrap(lambda r, n: np.asarray(c.statistic(r, n)))
-    per_seed = np.array(
-        [float(np.asarray(c.statistic(c.table.rates[None, s : s + 1], c.table.episodes[None, s : s + 1]))[0])
-         for s in range(len(c.table.seeds))]
-    )  # fmt: skip
-    per_seed = per_seed[np.isfinite(per_seed)]
+    point, reps, per_seed = _replicates(c.table, c.statistic)
     p_boot = _p_bootstrap(c, reps)
-    return _Evidence(float(point), np.asarray(reps, dtype=float), per_seed, _p_value(c, p_boot, per_seed), p_boot)
+    return _Evidence(point, reps, per_seed, _p_value(c, p_boot, per_seed), p_boot)
+
+
+def _replicates(table: Cells, statistic: Statistic) -> tuple[float, np.ndarray, np.ndarray]:
+    """A statistic's point, its bootstrap replicates (NaN where undefined) and its value on each training seed
+    alone (the defined ones)."""
+    point, reps = table.bootstrap(lambda r, n: np.asarray(statistic(r, n)))
+    per_seed = np.array(
+        [float(np.asarray(statistic(table.rates[None, s : s + 1], table.episodes[None, s : s + 1]))[0])
+         for s in range(len(table.seeds))]
+    )  # fmt: skip
+    return float(point), np.asarray(reps, dtype=float), per_seed[np.isfinite(per_seed)]
 
 
 def _p_bootstrap(c: Comparison, reps: np.ndarray) -> float:
@@ -477,23 +483,21 @@ def _seeds_needed(per_seed: np.ndarray, effect: float, level: float) -> float:
 def _change(table: Cells, statistic: Statistic, level: float) -> tuple[float, float, float]:
     """A success change with its interval at ``level``: the decision interval (bootstrap and t, hulled), or with
     one seed the bootstrap's alone (episodes only)."""
-    ev = _evidence(Comparison("", table, statistic, 0.0, +1, math.nan, lambda e, z: math.nan))
-    low, high = decision_interval(ev.reps, ev.per_seed, level)
-    if not (np.isfinite(low) and np.isfinite(high)):
-        low, high = (float(x) for x in percentile_interval(ev.reps, level=level))
-    return ev.point, float(low), float(high)
+    point, reps, per_seed = _replicates(table, statistic)
+    low, high = decision_interval(reps, per_seed, level)
+    if not np.isfinite(low):  # one seed (both ends are NaN together)
+        low, high = (float(x) for x in percentile_interval(reps, level=level))
+    return point, float(low), float(high)
 
 
-def _confounded(verdict: str, forced: bool, p_t: tuple[float, float, float], p_f: tuple[float, float, float],
-                seeds: int) -> bool:  # fmt: skip
+def _confounded(verdict: str, forced: bool, p_t: tuple[float, float, float], p_f: tuple[float, float, float]) -> bool:
     """A shrink that agrees on its gap, but whose treatment's P_T is resolved below the baseline's (or is at most
     the baseline's gap, which forces the sign), agrees only if its P_F is resolved above the baseline's: else the
     gap shrank because success fell, not because the policy generalizes better. Resolved means at the comparison's
-    level on seed-level intervals (with one seed nothing is, and the gap is not resolved either)."""
+    level on seed-level intervals: a gap that agrees has two seeds or more, so its success changes have them too."""
     if verdict != AGREES:
         return False
-    fell = seeds >= 2 and p_t[2] < 0
-    improved = seeds >= 2 and p_f[1] > 0
+    fell, improved = p_t[2] < 0, p_f[1] > 0
     return (fell or forced) and not improved
 
 
@@ -609,7 +613,7 @@ def _decide_one(c: Comparison, ev: _Evidence, level: float, stopped: bool) -> tu
     if c.success is not None:
         p_t, p_f = _change(c.table, c.success.p_t, level), _change(c.table, c.success.p_f, level)
         forced = bool(np.isfinite(c.contrary) and c.contrary <= 0)
-        if _confounded(verdict, forced, p_t, p_f, len(ev.per_seed)):
+        if _confounded(verdict, forced, p_t, p_f):
             verdict = CONFOUNDED
     effect = abs(ev.point - c.threshold)
     decided = Decided(
