@@ -18,7 +18,8 @@ from ..run.blocks import with_stop_rule
 from ..run.checkpoint import GIVEN_CHECKPOINT, keyed_checkpoint
 from ..run.inputs import OWN_FRAMES, CollectInputs, EnvInputs, EvalInputs, TrainInputs
 from ..run.recording import RECORD_SETTING
-from ..run.steps import RUN, Step, versions
+from ..run.step import RUN, Step
+from ..run.steps import versions
 from .config import RADII_M, MethodConfig, StudyConfig, TrainSettings, map_arg_paths, map_policy_paths
 
 DEFAULT_WIDTHS = "default"

@@ -19,7 +19,7 @@ from typing import Any
 from ...core.io import atomic_write_text
 from ...protocol.conditions import TRAIN_SUITE
 from ..sequential import StopRule, decide, running
-from .steps import Step
+from .step import Step
 
 SEQUENTIAL = "sequential"  # an evaluation input (in the key, only with auto): the rule and the group's conditions
 GROUP = "sequential_group"  # run entry (not in the key): condition -> key of every step of the group

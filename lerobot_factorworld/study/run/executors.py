@@ -19,7 +19,8 @@ from typing import Any, Protocol
 
 from ...core import provenance
 from ...envs import runtime
-from .steps import RUN, Step, device_problem, evaluated, run_steps, warm_up
+from .step import RUN, Step
+from .steps import device_problem, evaluated, run_steps, warm_up
 
 # The module the forkserver imports (by name: importing it here would import everything in this process).
 FORKSERVER_PRELOAD = f"{__package__}.forkserver_preload"

@@ -18,7 +18,6 @@ from __future__ import annotations
 import contextlib
 import contextvars
 import functools
-import hashlib
 import itertools
 import json
 import math
@@ -30,7 +29,6 @@ import sys
 import time
 import warnings
 from collections.abc import Iterator
-from dataclasses import dataclass, field
 from importlib import metadata
 from pathlib import Path
 from typing import Any
@@ -44,10 +42,12 @@ from ...datasets.merge import merge_datasets
 from ...families import family_of
 from ...protocol.conditions import fingerprint
 from ...protocol.coverage import coverage
+from . import blocks
 from .checkpoint import GIVEN_CHECKPOINT, checkpoint_folder
 from .eval_env import eval_env_config
 from .inputs import MERGED_FRAMES, CollectInputs, EvalInputs, TrainInputs, whole_epochs
 from .recording import RECORD_SETTING, RECORDED_KEY, EpisodeRecorder, write_recorded
+from .step import STEPS_DIR, Step, short_hash, step_folder
 from .train_state import (
     CHECKPOINTS_DIR,
     SAVES_ENV,
@@ -61,7 +61,6 @@ from .train_state import (
 )
 
 KINDS = ("collect", "train", "eval")
-STEP_FORMAT = 2  # bump when a step's meaning changes: every key changes with it (2: versions, content hashes)
 RESULT_FILE = "result.json"
 INPUTS_FILE = "step.json"
 LOG_FILE = "log.txt"
@@ -69,7 +68,6 @@ DATA_DIR = "data"
 MERGED_DATA_DIR = "merged_data"  # a training step's own dataset when other tasks' data joins the task's
 TRAIN_DIR = "train"
 CHECKPOINT = "checkpoints/last/pretrained_model"
-RUN = "run"  # meta entry: how to run a step, without changing its results (not in the key, not in labels)
 RESULT_PATHS = ("root", "checkpoint")  # result entries that name files: stored relative to the study folder
 DISTRIBUTION = "lerobot_env_factorworld"
 TIMINGS = "timings"  # result entry: where the step's time went (seconds); never in a key or in results.csv
@@ -79,7 +77,6 @@ PROVENANCE = "provenance"  # result entry: the code that made the step (Provenan
 # policy); ``grouped`` trains in the worker process and evaluates all conditions of a checkpoint in one task.
 EXECUTIONS = ("grouped", "per_step")
 VERSIONED = ("lerobot", "torch", "mujoco", "metaworld")  # packages whose version changes what a step computes
-STEPS_DIR = "steps"  # <study>/steps/<kind>/<key>/
 
 
 @functools.cache
@@ -100,44 +97,6 @@ def _version(distribution: str, default: str) -> str:
         return metadata.version(distribution)
     except metadata.PackageNotFoundError:
         return default
-
-
-def short_hash(payload: dict[str, Any]) -> str:
-    """16 hex digits of the SHA-256 of ``payload`` as sorted JSON: a step's key, or what an evaluation evaluates."""
-    return hashlib.sha256(json.dumps(payload, sort_keys=True).encode()).hexdigest()[:16]
-
-
-@dataclass(frozen=True)
-class Step:
-    """One unit of work. ``inputs`` (JSON-able) and ``deps`` decide ``key``; ``meta`` only labels it."""
-
-    kind: str
-    inputs: dict[str, Any]
-    deps: tuple[str, ...] = ()
-    meta: dict[str, Any] = field(default_factory=dict, compare=False)
-
-    @property
-    def key(self) -> str:
-        return short_hash({"format": STEP_FORMAT, "kind": self.kind, "inputs": self.inputs, "deps": list(self.deps)})
-
-    @property
-    def label(self) -> str:
-        return f"{self.kind} " + " ".join(f"{k}={v}" for k, v in self.meta.items() if k != RUN)
-
-    @property
-    def run(self) -> dict[str, Any]:
-        """How to run this step (worker count, threads, paths): never changes its results."""
-        return self.meta.get(RUN, {})
-
-    def folder(self, study_dir: str | Path) -> Path:
-        return step_folder(study_dir, self.kind, self.key)
-
-    def to_dict(self) -> dict[str, Any]:
-        return {"kind": self.kind, "inputs": self.inputs, "deps": list(self.deps), "meta": self.meta, "key": self.key}
-
-    @classmethod
-    def from_dict(cls, data: dict[str, Any]) -> Step:
-        return cls(data["kind"], data["inputs"], tuple(data["deps"]), data.get("meta", {}))
 
 
 def evaluated(step: Step) -> str:
@@ -281,9 +240,6 @@ def _run_sequential_groups(
 ) -> list[dict[str, Any]]:
     """Run the ``eval.episodes=auto`` groups among ``steps_data`` (``blocks.py``), each as one unit, recording
     ``{key: None | error}`` in ``out``; the other steps, left for :func:`run_steps`."""
-    # Deliberately here: blocks.py builds on this module (Step, EvalSession), so it cannot be imported at its top.
-    from . import blocks  # noqa: PLC0415
-
     steps = [Step.from_dict(d) for d in steps_data]
     groups: dict[str, list[Step]] = {}
     for step in steps:
@@ -302,8 +258,6 @@ def _run_sequential_groups(
 
 def _run_group(steps: list[Step], study_dir: Path, execution: str) -> None:
     """One group of sequential evaluations, in this process, each step's folder and result as :func:`run_step`'s."""
-    from . import blocks  # noqa: PLC0415 - blocks.py builds on this module (see _run_sequential_groups)
-
     os.environ.setdefault("MUJOCO_GL", "egl")
     made_by = provenance.current()
     start = time.perf_counter()
@@ -350,11 +304,6 @@ def _output_to(path: Path):
             os.dup2(saved[1], 2)
             for fd in saved:
                 os.close(fd)
-
-
-def step_folder(study_dir: str | Path, kind: str, key: str) -> Path:
-    """``<study>/steps/<kind>/<key>/``: where a step keeps its result and outputs."""
-    return Path(study_dir) / STEPS_DIR / kind / key
 
 
 def _dep_folder(study_dir: str, key: str) -> Path:

@@ -1,0 +1,57 @@
+"""A study's unit of work, :class:`Step`: what it computes (its key) and where it keeps its outputs. Its own module
+so that what builds on steps (``blocks.py``, the plan) needs none of ``steps.py``'s running code."""
+
+from __future__ import annotations
+
+import hashlib
+import json
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+STEP_FORMAT = 2  # bump when a step's meaning changes: every key changes with it (2: versions, content hashes)
+RUN = "run"  # meta entry: how to run a step, without changing its results (not in the key, not in labels)
+STEPS_DIR = "steps"  # <study>/steps/<kind>/<key>/
+
+
+def short_hash(payload: dict[str, Any]) -> str:
+    """16 hex digits of the SHA-256 of ``payload`` as sorted JSON: a step's key, or what an evaluation evaluates."""
+    return hashlib.sha256(json.dumps(payload, sort_keys=True).encode()).hexdigest()[:16]
+
+
+@dataclass(frozen=True)
+class Step:
+    """One unit of work. ``inputs`` (JSON-able) and ``deps`` decide ``key``; ``meta`` only labels it."""
+
+    kind: str
+    inputs: dict[str, Any]
+    deps: tuple[str, ...] = ()
+    meta: dict[str, Any] = field(default_factory=dict, compare=False)
+
+    @property
+    def key(self) -> str:
+        return short_hash({"format": STEP_FORMAT, "kind": self.kind, "inputs": self.inputs, "deps": list(self.deps)})
+
+    @property
+    def label(self) -> str:
+        return f"{self.kind} " + " ".join(f"{k}={v}" for k, v in self.meta.items() if k != RUN)
+
+    @property
+    def run(self) -> dict[str, Any]:
+        """How to run this step (worker count, threads, paths): never changes its results."""
+        return self.meta.get(RUN, {})
+
+    def folder(self, study_dir: str | Path) -> Path:
+        return step_folder(study_dir, self.kind, self.key)
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"kind": self.kind, "inputs": self.inputs, "deps": list(self.deps), "meta": self.meta, "key": self.key}
+
+    @classmethod
+    def from_dict(cls, data: dict[str, Any]) -> Step:
+        return cls(data["kind"], data["inputs"], tuple(data["deps"]), data.get("meta", {}))
+
+
+def step_folder(study_dir: str | Path, kind: str, key: str) -> Path:
+    """``<study>/steps/<kind>/<key>/``: where a step keeps its result and outputs."""
+    return Path(study_dir) / STEPS_DIR / kind / key
