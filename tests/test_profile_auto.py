@@ -57,17 +57,24 @@ def test_an_auto_profile_stops_each_condition_keeps_every_episode_and_says_why(f
     from lerobot_factorworld.study.runner import run_study
 
     out = tmp_path / "auto"
-    profile = _config(factorworld_checkpoint, out, *AUTO, "--eval.tolerance=0.5")
+    profile = _config(factorworld_checkpoint, out, *AUTO, "--eval.tolerance=0.6")
     outcome = run_study(profile.study(), profile.options(), "factorworld profile ...")
     assert outcome.ran["eval"] == 3 and not outcome.failed
     plan = make_plan(profile.study())
     results = {r["condition"]: r for r in (read_result(s, out) for s in plan.evaluations())}
-    # an untrained policy fails everywhere: every gap is 0, so each condition stops within the tolerance
+    # an untrained policy fails everywhere: every gap is 0, so each condition stops within the tolerance, at 6 of 8
     for condition in ("light", "table_texture"):
         stop = results[condition]["sequential"]
-        assert stop["reason"] == "within tolerance" and -0.5 <= stop["gap_low"] <= 0 <= stop["gap_high"] <= 0.5
-        assert stop["episodes"] % 2 == 0 and results[condition]["seeds"] == list(range(1000, 1000 + stop["episodes"]))
+        assert stop["reason"] == "within tolerance" and -0.6 <= stop["gap_low"] <= 0 <= stop["gap_high"] <= 0.6
+        assert stop["episodes"] == 6 and results[condition]["seeds"] == list(range(1000, 1006))
     assert results["train"]["sequential"]["episodes"] == max(r["sequential"]["episodes"] for r in results.values())
+    for result in results.values():  # each condition's own cost (the cost model's refit), not the group's
+        assert result["env_steps"] == sum(result["lengths"]) and 0 < round(result["timings"]["total"], 2) == result["seconds"]
+        assert result["timings"]["env_step"] + result["timings"]["policy"] < result["timings"]["total"]
+    from lerobot_factorworld.study.plan.cost import fit_constants
+
+    # every episode runs to its 4-step limit: the refit's fraction of the horizon counts the episodes each ran
+    assert fit_constants(plan, out)["eval"]["episode_fraction"]["pick-place"] == 1.0
     rows = {r["condition"]: r for r in csv.DictReader(open(out / "results.csv"))}
     assert float(rows["light"]["gap_ci_low"]) == results["light"]["sequential"]["gap_low"]  # the anytime interval
     episodes = read_episodes(out / "episodes.parquet")
@@ -102,7 +109,7 @@ def test_an_auto_profile_stops_each_condition_keeps_every_episode_and_says_why(f
     for entry in entries:
         assert tuple(entry) == ENTRY_FIELDS and set(entry["dataset"]) == {"id", "task_id"}
         assert entry["value"] == 0.0 and isinstance(entry["value"], float)  # success in percent
-        assert "8 episodes" in entry["notes"] and "anytime-valid 95% interval" in entry["notes"]
+        assert "6 episodes" in entry["notes"] and "anytime-valid 95% interval" in entry["notes"]
         assert f"lerobot_factorworld {__version__}" in entry["notes"]
     assert "stopped: within tolerance" in entries[1]["notes"]
     card = yaml.safe_load((out / "eval.yaml").read_text())

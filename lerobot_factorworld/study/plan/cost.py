@@ -370,7 +370,8 @@ def fit_constants(plan: Plan, study_dir: str | Path) -> dict[str, Any]:
             horizon = step_limit(task, inputs.max_episode_steps)
             work["eval"] += variable
             units["eval"] += result.get("env_steps", 0)
-            steps_run.setdefault(task, []).extend([result.get("env_steps", 0), inputs.episodes * horizon])
+            ran = len(result.get("successes", ())) or inputs.episodes  # under auto, ``episodes`` is the budget
+            steps_run.setdefault(task, []).extend([result.get("env_steps", 0), ran * horizon])
     old = load_model()
     model = json.loads(json.dumps(old))  # kinds a study did not run keep their constants
     for kind in KINDS:

@@ -11,6 +11,7 @@ results are written only once every condition has stopped, ``train`` last.
 
 from __future__ import annotations
 
+import contextlib
 import json
 from collections.abc import Callable
 from pathlib import Path
@@ -53,11 +54,20 @@ def rule_of(step: Step) -> StopRule:
 
 Session = Any  # steps.EvalSession: passed in, as steps.py imports this module
 OpenSession = Callable[[Step], Session]
+Timed = Callable[[str], contextlib.AbstractContextManager]
 
 
-def run_group(steps: list[Step], study_dir: Path, open_session: OpenSession, write: Callable) -> None:
+def _untimed(condition: str) -> contextlib.AbstractContextManager:
+    return contextlib.nullcontext()
+
+
+def run_group(
+    steps: list[Step], study_dir: Path, open_session: OpenSession, write: Callable, timed: Timed = _untimed
+) -> None:
     """Run the group of ``steps`` (some of it may be finished already: it is then reread, never rerun) and write
-    each unfinished step's result with ``write(step, result)``; ``open_session(step)`` prepares a condition."""
+    each unfinished step's result with ``write(step, result)``; ``open_session(step)`` prepares a condition.
+    ``timed(condition)`` encloses all of one condition's own work (preparing it, its episodes, its result), so
+    each condition's timings are its own and not the group's."""
     first = steps[0]
     keys: dict[str, str] = first.run[GROUP]
     rule = rule_of(first)
@@ -76,10 +86,11 @@ def run_group(steps: list[Step], study_dir: Path, open_session: OpenSession, wri
         for condition in active:
             block = _read_block(folders[condition], begin)
             if block is None:
-                if condition not in sessions:
-                    sessions[condition] = open_session(_step_of(by_condition, condition, folders))
-                session = sessions[condition]
-                successes = session.episodes(begin, rule.block)
+                with timed(condition):
+                    if condition not in sessions:
+                        sessions[condition] = open_session(_step_of(by_condition, condition, folders))
+                    session = sessions[condition]
+                    successes = session.episodes(begin, rule.block)
                 seeds = list(range(begin, begin + rule.block))
                 block = {
                     "successes": successes,
@@ -99,10 +110,11 @@ def run_group(steps: list[Step], study_dir: Path, open_session: OpenSession, wri
         if step is None:  # finished by an earlier run of the group
             continue
         n = stops[condition].episodes
-        if condition not in sessions:
-            sessions[condition] = open_session(step)
         own = {name: values[:n] for name, values in outcomes[condition].items()}
-        result = sessions[condition].result(own["successes"], own["seeds"], own["stages"], own["lengths"])
+        with timed(condition):
+            if condition not in sessions:
+                sessions[condition] = open_session(step)
+            result = sessions[condition].result(own["successes"], own["seeds"], own["stages"], own["lengths"])
         result[SEQUENTIAL] = stops[condition].to_dict()
         write(step, result)
 

@@ -257,14 +257,26 @@ def _run_sequential_groups(
 
 
 def _run_group(steps: list[Step], study_dir: Path, execution: str) -> None:
-    """One group of sequential evaluations, in this process, each step's folder and result as :func:`run_step`'s."""
+    """One group of sequential evaluations, in this process, each step's folder and result as :func:`run_step`'s.
+    Each condition records its own timings, environment steps and wall time (what the cost model refits from):
+    the group's time is the sum of its conditions', never counted once per condition."""
     os.environ.setdefault("MUJOCO_GL", "egl")
     made_by = provenance.current()
-    start = time.perf_counter()
-    timings = Timings()
+    own = {condition: Timings() for condition in steps[0].run[blocks.GROUP]}
+    wall = dict.fromkeys(own, 0.0)
     for step in steps:
         step.folder(study_dir).mkdir(parents=True, exist_ok=True)
         atomic_write_text(step.folder(study_dir) / INPUTS_FILE, json.dumps(step.to_dict(), indent=1, sort_keys=True))
+
+    @contextlib.contextmanager
+    def timed(condition: str) -> Iterator[None]:
+        start = time.perf_counter()
+        token = _CURRENT.set((own[condition], execution))
+        try:
+            yield
+        finally:
+            _CURRENT.reset(token)
+            wall[condition] += time.perf_counter() - start
 
     def open_session(step: Step) -> EvalSession:
         deps = [_dep_folder(str(study_dir), key) for key in step.deps]
@@ -272,18 +284,15 @@ def _run_group(steps: list[Step], study_dir: Path, execution: str) -> None:
             return EvalSession(step, step.folder(study_dir), deps, reload=True)
 
     def write(step: Step, result: dict[str, Any]) -> None:
-        result["seconds"] = round(time.perf_counter() - start, 2)  # the group's time so far (shared work)
-        result[TIMINGS] = {**timings.as_dict(), "total": time.perf_counter() - start}
+        condition = step.meta["condition"]
+        result["seconds"] = round(wall[condition], 2)
+        result[TIMINGS] = {**own[condition].as_dict(), "total": wall[condition]}
         result[PROVENANCE] = made_by.to_dict()
         stored = _portable(result, study_dir)
         atomic_write_text(step.folder(study_dir) / RESULT_FILE, json.dumps(stored, indent=1, sort_keys=True))
 
-    token = _CURRENT.set((timings, execution))
-    try:
-        with _output_to(steps[0].folder(study_dir) / LOG_FILE):
-            blocks.run_group(steps, study_dir, open_session, write)
-    finally:
-        _CURRENT.reset(token)
+    with _output_to(steps[0].folder(study_dir) / LOG_FILE):
+        blocks.run_group(steps, study_dir, open_session, write, timed)
 
 
 @contextlib.contextmanager
