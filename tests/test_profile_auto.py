@@ -69,7 +69,10 @@ def test_an_auto_profile_stops_each_condition_keeps_every_episode_and_says_why(f
         assert stop["episodes"] == 6 and results[condition]["seeds"] == list(range(1000, 1006))
     assert results["train"]["sequential"]["episodes"] == max(r["sequential"]["episodes"] for r in results.values())
     for result in results.values():  # each condition's own cost (the cost model's refit), not the group's
-        assert result["env_steps"] == sum(result["lengths"]) and 0 < round(result["timings"]["total"], 2) == result["seconds"]
+        assert (
+            result["env_steps"] == sum(result["lengths"])
+            and 0 < round(result["timings"]["total"], 2) == result["seconds"]
+        )
         assert result["timings"]["env_step"] + result["timings"]["policy"] < result["timings"]["total"]
     from lerobot_factorworld.study.plan.cost import fit_constants
 
