@@ -57,7 +57,9 @@ def test_an_auto_profile_stops_each_condition_keeps_every_episode_and_says_why(f
     from lerobot_factorworld.study.runner import run_study
 
     out = tmp_path / "auto"
-    profile = _config(factorworld_checkpoint, out, *AUTO, "--eval.tolerance=0.6")
+    profile = _config(
+        factorworld_checkpoint, out, *AUTO, "--eval.tolerance=0.6", "--hub_benchmark=someone/factor-world"
+    )
     outcome = run_study(profile.study(), profile.options(), "factorworld profile ...")
     assert outcome.ran["eval"] == 3 and not outcome.failed
     plan = make_plan(profile.study())
@@ -101,7 +103,7 @@ def test_an_auto_profile_stops_each_condition_keeps_every_episode_and_says_why(f
     import yaml
 
     from lerobot_factorworld import __version__
-    from lerobot_factorworld.study.results.eval_results import ENTRY_FIELDS
+    from lerobot_factorworld.study.results.eval_results import ENTRY_FIELDS, card_problems, entry_problems
 
     entries = yaml.safe_load((out / ".eval_results" / "factorworld.yaml").read_text())
     assert [e["dataset"]["task_id"] for e in entries] == [
@@ -117,6 +119,8 @@ def test_an_auto_profile_stops_each_condition_keeps_every_episode_and_says_why(f
     assert "stopped: within tolerance" in entries[1]["notes"]
     card = yaml.safe_load((out / "eval.yaml").read_text())
     assert {t["id"] for t in card["tasks"]} == {e["dataset"]["task_id"] for e in entries}
+    assert card_problems(card) == [] and entry_problems(entries, [t["id"] for t in card["tasks"]]) == []
+    assert {e["dataset"]["id"] for e in entries} == {"someone/factor-world"}  # --hub_benchmark
     import datasets
 
     loaded = datasets.load_dataset("parquet", data_files=str(out / "episodes.parquet"), split="train")

@@ -81,6 +81,11 @@ def run_study(cfg: StudyConfig, options: RunOptions | None = None, command: str 
     refused here."""
     _check_grid(cfg)
     options = options or RunOptions()
+    if options.model_repo_id and (len(cfg.methods) != 1 or cfg.trained_methods()):
+        raise ValueError(
+            "model_repo_id opens a pull request with one given checkpoint's results (factorworld profile's); this "
+            f"study has {len(cfg.methods)} method(s), {len(cfg.trained_methods())} of them trained here"
+        )
     if options.inspects:
         raise ValueError("dry_run, profile and fit_cost run nothing: use inspect_study")
     check_reuse_from(options.reuse_from, cfg.out_dir)

@@ -23,6 +23,7 @@ import draccus
 
 from ...core.checks import check_at_least, check_choice
 from ...core.io import atomic_write_json
+from ...datasets.hub import check_hub_repo_id
 from ...envs.lerobot_obs import FACTORWORLD_OBS, LEROBOT_METAWORLD_OBS, check_lerobot_task, check_obs_mode
 from ...experts import DEFAULT_ACTION_NOISE
 from ...factors.registry import PAPER_STUDY_FACTORS, WIDTHS, check_task_support, get_factor
@@ -562,6 +563,11 @@ def write_run_config(path: str | Path, settings: dict[str, Any]) -> None:
     atomic_write_json(path, settings, indent=1, sort_keys=True, default=str)
 
 
+HUB_BENCHMARK = (
+    "lerobot-factorworld/factor-world"  # the benchmark dataset a profile's Hub results name (not on the Hub yet)
+)
+
+
 @dataclass
 class StudyConfig:
     """A generalization-gap study: the experiment grid and the claims it tests. Every setting here can change
@@ -589,6 +595,8 @@ class StudyConfig:
         finding: The paper's finding this study is one of several studies of (``F2``, ``F8``, ...): its report
             decides its claims together with those of the other studies of the same finding beside its folder,
             with one Holm correction for all of them and shared cells decided once. Empty: this study alone.
+        hub_benchmark: The Hub benchmark dataset (``user/name``) a profile's ``.eval_results`` entries name and
+            its ``eval.yaml`` describes (``results/eval_results.py``). The default is not on the Hub yet.
     """
 
     name: str = "study"
@@ -609,6 +617,7 @@ class StudyConfig:
     eval: EvalSettings = field(default_factory=EvalSettings)
     claims: list[ClaimConfig] = field(default_factory=list)
     finding: str = ""
+    hub_benchmark: str = HUB_BENCHMARK
 
     def __post_init__(self) -> None:
         self.methods = [m if isinstance(m, MethodConfig) else MethodConfig(**m) for m in self.methods]
@@ -675,6 +684,7 @@ class StudyConfig:
             claim.validate([m.name for m in self.methods], self.tasks, self.shifted_factors(), self.pair_conditions())
         if self.finding and not re.fullmatch(r"[A-Za-z0-9_.-]+", self.finding):
             raise ValueError(f"finding must be a short name such as F8 (letters, digits, _ . -), got {self.finding!r}")
+        check_hub_repo_id(self.hub_benchmark, "hub_benchmark")
         for factor in self.radius_factors:
             if factor not in RADIUS_FACTORS:
                 raise ValueError(f"the radius sweep applies to {', '.join(RADIUS_FACTORS)}, got {factor!r}")

@@ -17,7 +17,7 @@ from ...protocol.sampling import SamplingOptions
 from ...scene.build import DEFAULT_QUALITY
 from ..run.checkpoint import local_folder, read_policy_config, training_dataset
 from ..run.options import RunOptions
-from .config import CollectSettings, EvalSettings, MethodConfig, StudyConfig
+from .config import HUB_BENCHMARK, CollectSettings, EvalSettings, MethodConfig, StudyConfig
 
 DEFAULT_METHOD = "checkpoint"  # the method's name when the checkpoint's config names no policy type
 
@@ -86,6 +86,7 @@ class ProfileConfig:
         hub_repo_id: ``user/name`` of that dataset repo.
         model_repo_id: ``user/name`` of the checkpoint's model repo: with ``push_to_hub``, a pull request adds
             ``.eval_results/factorworld.yaml`` and the per-episode Parquet to it.
+        hub_benchmark: The Hub benchmark dataset (``user/name``) the ``.eval_results`` entries name.
     """
 
     policy: ProfilePolicy = field(default_factory=ProfilePolicy)
@@ -107,6 +108,7 @@ class ProfileConfig:
     push_to_hub: bool = False
     hub_repo_id: str | None = None
     model_repo_id: str | None = None
+    hub_benchmark: str = HUB_BENCHMARK
 
     def __post_init__(self) -> None:
         if not self.policy.path:
@@ -156,6 +158,7 @@ class ProfileConfig:
             methods=[method],
             collect=_collect_settings(env.task_names[0], env.cameras, env.image_size, env.sampling, own_quality),
             eval=self.eval,
+            hub_benchmark=self.hub_benchmark,
         )
 
     def options(self) -> RunOptions:
