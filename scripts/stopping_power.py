@@ -1,0 +1,137 @@
+"""When ``eval.episodes=auto`` saves episodes: its stopping rule (lerobot_factorworld/study/sequential.py) on
+simulated profiles of one checkpoint, against a fixed number of episodes per condition equal to its budget.
+
+Two parts:
+
+1. The floor. No valid test of a paired gap, sequential or fixed-n, that declares either sign at ``alpha/(2k)``
+   each (as this rule and a corrected two-sided interval do) can declare a gap before ``n`` paired episodes with
+   ``2**-n <= alpha / (2k)``: a condition with no gap, whose paired differences are +1 or -1 with probability 1/2
+   each, shows ``n`` differences of +1 with probability ``2**-n``. With 7 factors at 95% that is 9 episodes, and
+   at 9 every one of them must favour train. The rule's own floor (the first look at which
+   differences that are all +1 decide) is printed beside it.
+2. Profiles simulated as the tests simulate them (tests/test_sequential.py): each episode seed has one latent
+   difficulty that, with probability ``--copula``, decides every condition's outcome, else each condition
+   draws its own. The default train success rate and gaps are F1's bc means (docs/results/f1_ordering:
+   P_T 0.917; gaps 0.437 table_pos, 0.423 table_texture, 0.117 camera_pos, 0.090 object_texture,
+   0.077 floor_texture, 0.053 light, 0.023 distractors). For each budget, it prints the share of the fixed
+   design's episodes the rule runs, and how often each condition is decided by the rule and by the fixed-n
+   analysis at the budget: Newcombe's paired 95% interval uncorrected, as results.csv has it, and corrected
+   (Bonferroni over the ``k`` conditions, the family-wise guarantee the rule gives, without its peeking).
+
+    python scripts/stopping_power.py [--profiles 400] [--budgets 20,40,100,200] [--block 5] [--tolerance 0.1]
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+from statistics import NormalDist
+
+import numpy as np
+from tqdm import tqdm
+
+from lerobot_factorworld.study.confseq import candidate_grid
+from lerobot_factorworld.study.metrics import paired_gap
+from lerobot_factorworld.study.sequential import DECIDED, StopRule, apply_rule
+
+F1_FACTORS = ("table_pos", "table_texture", "camera_pos", "object_texture", "floor_texture", "light", "distractors")
+F1_GAPS = (0.437, 0.423, 0.117, 0.090, 0.077, 0.053, 0.023)  # bc's mean gaps over F1's 15 cells
+F1_P_TRAIN = 0.917
+SIM_GRID = candidate_grid(401)  # bounds at 0.005 of a gap, stepped outwards (the tests use 201 points)
+
+
+def valid_test_floor(alpha: float, k: int) -> int:
+    """The fewest paired episodes at which a valid test declaring either sign at ``alpha/(2k)`` can declare one."""
+    return math.ceil(math.log2(2 * k / alpha))
+
+
+def rule_floor(rule: StopRule, k: int) -> int:
+    """The first look of ``rule`` (blocks of 1) at which paired differences that are all +1 decide a gap."""
+    one = StopRule(1, rule.max_episodes, rule.tolerance, rule.confidence)
+    train, shifted = np.ones((1, rule.max_episodes)), np.zeros((1, k, rule.max_episodes))
+    stops = apply_rule(train, shifted, one, grid=SIM_GRID)
+    return int(stops.episodes[0, 0]) if stops.reason[0, 0] == DECIDED else -1
+
+
+def profiles(p_train: float, gaps: np.ndarray, n: int, episodes: int, copula: float, rng) -> tuple[np.ndarray, ...]:
+    """``n`` profiles of paired, correlated outcomes (``train`` ``(n, T)``, shifted ``(n, k, T)``)."""
+    rates = p_train - np.clip(gaps, p_train - 1, p_train)
+    shared = rng.random((n, 1, episodes))
+    own = rng.random((n, len(gaps) + 1, episodes))
+    u = np.where(rng.random((n, len(gaps) + 1, episodes)) < copula, shared, own)
+    return (u[:, 0] < p_train).astype(float), (u[:, 1:] < rates[None, :, None]).astype(float)
+
+
+def compare(budget: int, args, gaps: np.ndarray, rng) -> list[str]:
+    rule = StopRule(args.block, budget, args.tolerance, args.confidence)
+    train, shifted = profiles(args.p_train, gaps, args.profiles, budget, args.copula, rng)
+    stops = apply_rule(train, shifted, rule, grid=SIM_GRID)
+    used = stops.episodes.max(axis=1) + stops.episodes.sum(axis=1)  # train runs as long as its longest condition
+    share = used.mean() / ((len(gaps) + 1) * budget)
+    fixed = np.zeros(stops.episodes.shape, dtype=bool)
+    corrected = np.zeros(stops.episodes.shape, dtype=bool)
+    z = NormalDist().inv_cdf(1 - (1 - args.confidence) / (2 * len(gaps)))
+    for p in range(args.profiles):
+        for c in range(len(gaps)):
+            pair = train[p].astype(bool), shifted[p, c].astype(bool)
+            _, low, high = paired_gap(*pair)
+            fixed[p, c] = low > 0 or high < 0
+            _, low, high = paired_gap(*pair, z=z)
+            corrected[p, c] = low > 0 or high < 0
+    auto = stops.reason == DECIDED
+    sign = np.sign(stops.low + stops.high)
+    same = (auto == corrected).mean()
+    lines = [
+        f"budget {budget}: auto runs {share:.1%} of the fixed design's episodes (train {stops.episodes.max(axis=1).mean():.1f}"
+        f" per profile); conditions decided per profile by auto / fixed-n / fixed-n corrected: "
+        f"{auto.sum(axis=1).mean():.2f} / {fixed.sum(axis=1).mean():.2f} / {corrected.sum(axis=1).mean():.2f}; "
+        f"auto's decision that of fixed-n corrected {same:.1%}; auto's wrong signs {(auto & (sign < 0)).sum()}",
+    ]
+    for c, name in enumerate(args.factors):
+        lines.append(
+            f"  {name:<15} gap {gaps[c]:+.3f}: auto decides {auto[:, c].mean():6.1%} (median stop "
+            f"{int(np.median(stops.episodes[:, c]))}), fixed-n {fixed[:, c].mean():6.1%}, corrected "
+            f"{corrected[:, c].mean():6.1%}"
+        )
+    return lines
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--profiles", type=int, default=400)
+    parser.add_argument("--budgets", default="20,40,100,200")
+    parser.add_argument("--block", type=int, default=5)
+    parser.add_argument("--tolerance", type=float, default=0.1)
+    parser.add_argument("--confidence", type=float, default=0.95)
+    parser.add_argument("--p_train", type=float, default=F1_P_TRAIN)
+    parser.add_argument("--gaps", default=",".join(str(g) for g in F1_GAPS))
+    parser.add_argument("--factors", default=",".join(F1_FACTORS))
+    parser.add_argument("--copula", type=float, default=0.6)
+    parser.add_argument("--seed", type=int, default=0)
+    args = parser.parse_args()
+    gaps = np.array([float(g) for g in args.gaps.split(",")])
+    args.factors = args.factors.split(",")
+    if len(args.factors) != len(gaps):
+        parser.error(f"--factors names {len(args.factors)} conditions, --gaps gives {len(gaps)}")
+    budgets = [int(b) for b in args.budgets.split(",")]
+    if any(b % args.block for b in budgets):
+        parser.error(f"every budget must be a multiple of --block={args.block}")
+    k, alpha = len(gaps), 1 - args.confidence
+    rng = np.random.default_rng(args.seed)
+    print(
+        f"stopping power of eval.episodes=auto: {k} shifted conditions, P_T {args.p_train}, block {args.block}, "
+        f"tolerance {args.tolerance}, confidence {args.confidence} (Bonferroni over the {k}), {args.profiles} "
+        f"simulated profiles per budget (copula {args.copula}, seed {args.seed}); fixed-n = Newcombe's paired 95% "
+        f"interval at the budget, uncorrected and corrected (Bonferroni over the {k})"
+    )
+    print(
+        f"floor: no valid test declaring either sign at {alpha:g}/(2x{k}) declares a gap before "
+        f"{valid_test_floor(alpha, k)} paired episodes, all favouring train; this rule first decides at {rule_floor(StopRule(1, 200, args.tolerance, args.confidence), k)}"
+        " (all favouring train, blocks of 1)"
+    )
+    for budget in tqdm(budgets, desc="budgets", leave=False):
+        print("\n".join(compare(budget, args, gaps, rng)))
+
+
+if __name__ == "__main__":
+    main()

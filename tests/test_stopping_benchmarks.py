@@ -1,0 +1,48 @@
+"""The committed outputs of the stopping rule's benchmarks (docs/benchmarks/replay_stopping.txt and
+stopping_power.txt), which docs/profile.md quotes, are what their commands print now: each file holds its
+commands (``$ python scripts/...``) and their outputs, and both scripts are deterministic (seeded simulation,
+committed episodes), so a change to the rule or to the episodes that moves a quoted number fails here."""
+
+from __future__ import annotations
+
+import shlex
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+OUTPUTS = ("replay_stopping.txt", "stopping_power.txt")
+
+
+def _runs(text: str) -> list[tuple[list[str], str]]:
+    """(command arguments, its output) for every ``$ python ...`` line of a committed output."""
+    runs: list[tuple[list[str], list[str]]] = []
+    for line in text.splitlines():
+        if line.startswith("$ python "):
+            runs.append((shlex.split(line[len("$ python ") :]), []))
+        else:
+            runs[-1][1].append(line)
+    return [(args, "\n".join(lines).strip()) for args, lines in runs]
+
+
+@pytest.mark.parametrize("output", OUTPUTS)
+def test_a_committed_output_is_what_its_commands_print(output):
+    runs = _runs((ROOT / "docs" / "benchmarks" / output).read_text())
+    assert runs, f"{output} names no command"
+    for args, committed in runs:
+        proc = subprocess.run([sys.executable, *args], capture_output=True, text=True, timeout=300, cwd=ROOT)
+        assert proc.returncode == 0, proc.stderr[-2000:]
+        assert proc.stdout.strip() == committed, f"{' '.join(args)} prints something else than {output} holds"
+
+
+def test_the_floor_no_valid_test_can_beat():
+    sys.path.insert(0, str(ROOT / "scripts"))
+    from stopping_power import rule_floor, valid_test_floor
+
+    from lerobot_factorworld.study.sequential import StopRule
+
+    assert valid_test_floor(0.05, 7) == 9 and valid_test_floor(0.05, 1) == 6  # 2**-9 <= 0.05/14 < 2**-8
+    floor = rule_floor(StopRule(1, 100, 0.1, 0.95), 7)
+    assert valid_test_floor(0.05, 7) <= floor <= 20  # the rule is valid, so never below the floor
