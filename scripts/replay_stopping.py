@@ -4,8 +4,11 @@ For every cell (method, task, N, seed, widths) of each study's ``docs/results/<s
 ``train`` condition and shifted ones on the same episode seeds, the rule runs over the episodes in seed order, in
 blocks of ``--block``, capped at the committed count (the budget), Bonferroni over the cell's shifted conditions.
 It prints the share of the committed episodes the rule would have run (train as long as its longest condition)
-and compares each condition's decision with the fixed-n analysis of the same cell (Newcombe's paired 95% interval
-on all committed episodes, as results.csv has it, uncorrected): a gap with its sign, or none.
+and compares each condition's decision with the fixed-n analysis of the same cell on all committed episodes: a gap
+with its sign, or none, from Newcombe's paired 95% interval uncorrected (as results.csv has it) and corrected
+(Bonferroni over the cell's shifted conditions: the family-wise guarantee the rule gives, without its stopping).
+Shown as ``fixed:<uncorrected>/<corrected>``. A cell that two studies share (the same episodes) counts once in
+the last line.
 
     python scripts/replay_stopping.py [--block 5] [--tolerance 0.1] [--confidence 0.95] [study ...]
 """
@@ -15,6 +18,7 @@ from __future__ import annotations
 import argparse
 from collections import Counter
 from pathlib import Path
+from statistics import NormalDist
 
 import pyarrow.parquet as pq
 
@@ -41,13 +45,19 @@ def cells(study: str) -> dict[tuple, dict[str, list[tuple[int, bool]]]]:
     return out
 
 
-def fixed_decision(train: list[bool], shifted: list[bool]) -> str:
-    gap, low, high = paired_gap(train, shifted)
+def fixed_decision(train: list[bool], shifted: list[bool], conditions: int = 1) -> str:
+    """Newcombe's paired 95% interval's decision, Bonferroni-corrected over ``conditions``."""
+    z = NormalDist().inv_cdf(1 - 0.05 / (2 * conditions))
+    gap, low, high = paired_gap(train, shifted, z=z)
     return "+" if low > 0 else "-" if high < 0 else "none"
 
 
-def replay(study: str, block: int, tolerance: float, confidence: float) -> tuple[list[str], Counter, int, int]:
-    lines, agreement, used, committed = [], Counter(), 0, 0
+Cell = tuple[tuple, int, int, Counter, Counter]  # (identity, episodes used, committed, agreement, corrected agreement)
+
+
+def replay(study: str, block: int, tolerance: float, confidence: float) -> tuple[list[str], list[Cell]]:
+    lines: list[str] = []
+    replayed: list[Cell] = []
     for key, conditions in cells(study).items():
         train = conditions.get("train")
         shifted = {c: e for c, e in conditions.items() if c != "train"}
@@ -63,19 +73,24 @@ def replay(study: str, block: int, tolerance: float, confidence: float) -> tuple
         t = [ok for _, ok in train]
         stops = decide(t, {c: [ok for _, ok in e] for c, e in shifted.items()}, rule)
         cell_used = sum(s.episodes for s in stops.values())
-        used, committed = used + cell_used, committed + n * (len(shifted) + 1)
+        agreement, corrected = Counter(), Counter()
         parts = []
         for condition, stop in stops.items():
             if condition == "train":
                 continue
             rule_says = ("+" if stop.gap_low > 0 else "-") if stop.reason == "decided" else "none"
             fixed = fixed_decision(t, [ok for _, ok in shifted[condition]])
+            strict = fixed_decision(t, [ok for _, ok in shifted[condition]], len(shifted))
             agreement[(rule_says, fixed)] += 1
+            corrected[(rule_says, strict)] += 1
             short = {"decided": "dec", "within tolerance": "tol", "budget": "bud"}[stop.reason]
-            parts.append(f"{condition} {stop.episodes} {short}{'' if rule_says == 'none' else rule_says} fixed:{fixed}")
+            said = "" if rule_says == "none" else rule_says
+            parts.append(f"{condition} {stop.episodes} {short}{said} fixed:{fixed}/{strict}")
         lines.append(f"  {label}: {cell_used}/{n * (len(shifted) + 1)} episodes; train {stops['train'].episodes}; "
                      + "; ".join(parts))  # fmt: skip
-    return lines, agreement, used, committed
+        identity = (key, tuple(t), tuple((c, tuple(ok for _, ok in e)) for c, e in sorted(shifted.items())))
+        replayed.append((identity, cell_used, n * (len(shifted) + 1), agreement, corrected))
+    return lines, replayed
 
 
 def main() -> None:
@@ -88,19 +103,31 @@ def main() -> None:
     print(
         f"replay of eval.episodes=auto: block {args.block}, tolerance {args.tolerance:g}, confidence "
         f"{args.confidence:g} (anytime-valid, Bonferroni over each cell's shifted conditions); budget = the "
-        "committed episodes per condition; fixed-n = Newcombe's paired 95% interval on all of them (uncorrected)"
+        "committed episodes per condition; fixed-n = Newcombe's paired 95% interval on all of them, uncorrected / "
+        "corrected (Bonferroni over the cell's shifted conditions)"
     )
-    total = Counter()
-    all_used = all_committed = 0
+    unique: dict[tuple, Cell] = {}
     for study in args.studies:
-        lines, agreement, used, committed = replay(study, args.block, args.tolerance, args.confidence)
+        lines, replayed = replay(study, args.block, args.tolerance, args.confidence)
+        used, committed = sum(c[1] for c in replayed), sum(c[2] for c in replayed)
         print(f"\n{study}: " + (f"{used}/{committed} episodes ({used / committed:.1%})" if committed else "no cells"))
         print("\n".join(lines))
         if committed:
-            print("  " + _agreement_line(agreement))
-        total += agreement
-        all_used, all_committed = all_used + used, all_committed + committed
-    print(f"\nall: {all_used}/{all_committed} episodes ({all_used / all_committed:.1%}); " + _agreement_line(total))
+            print("  " + _agreement_lines(replayed))
+        unique.update({cell[0]: cell for cell in replayed})
+    cells = list(unique.values())
+    used, committed = sum(c[1] for c in cells), sum(c[2] for c in cells)
+    print(
+        f"\nall ({len(cells)} distinct cells): {used}/{committed} episodes ({used / committed:.1%}); "
+        + _agreement_lines(cells)
+    )
+
+
+def _agreement_lines(cells: list[Cell]) -> str:
+    return "; ".join(
+        f"against fixed-n {name}: {_agreement_line(sum((c[index] for c in cells), Counter()))}"
+        for name, index in (("uncorrected", 3), ("corrected", 4))
+    )
 
 
 def _agreement_line(agreement: Counter) -> str:

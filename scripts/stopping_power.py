@@ -1,7 +1,7 @@
 """When ``eval.episodes=auto`` saves episodes: its stopping rule (lerobot_factorworld/study/sequential.py) on
 simulated profiles of one checkpoint, against a fixed number of episodes per condition equal to its budget.
 
-Two parts:
+Three parts:
 
 1. The floor. No valid test of a paired gap, sequential or fixed-n, that declares either sign at ``alpha/(2k)``
    each (as this rule and a corrected two-sided interval do) can declare a gap before ``n`` paired episodes with
@@ -9,7 +9,13 @@ Two parts:
    each, shows ``n`` differences of +1 with probability ``2**-n``. With 7 factors at 95% that is 9 episodes, and
    at 9 every one of them must favour train. The rule's own floor (the first look at which
    differences that are all +1 decide) is printed beside it.
-2. Profiles simulated as the tests simulate them (tests/test_sequential.py): each episode seed has one latent
+2. The power bound. For independent paired episodes whose discordant pairs (train succeeds and the shift fails,
+   or the reverse) come at rates ``p10`` and ``p01``, no test valid at ``alpha/k`` for a gap of 0 declares a
+   positive gap after ``n`` episodes more often than the most powerful test (Neyman-Pearson, randomised at the
+   boundary) of the one null that keeps the ties and splits the discordant rate evenly: any valid test must hold
+   its level there too. Printed at ``n`` = 10 and 20 for the simulation's rates and for the rates in F1's
+   committed episodes (bc, its 15 cells pooled: docs/results/f1_ordering/episodes.parquet).
+3. Profiles simulated as the tests simulate them (tests/test_sequential.py): each episode seed has one latent
    difficulty that, with probability ``--copula``, decides every condition's outcome, else each condition
    draws its own. The default train success rate and gaps are F1's bc means (docs/results/f1_ordering:
    P_T 0.917; gaps 0.437 table_pos, 0.423 table_texture, 0.117 camera_pos, 0.090 object_texture,
@@ -25,9 +31,11 @@ from __future__ import annotations
 
 import argparse
 import math
+from pathlib import Path
 from statistics import NormalDist
 
 import numpy as np
+import pyarrow.parquet as pq
 from tqdm import tqdm
 
 from lerobot_factorworld.study.confseq import candidate_grid
@@ -37,6 +45,7 @@ from lerobot_factorworld.study.sequential import DECIDED, StopRule, apply_rule
 F1_FACTORS = ("table_pos", "table_texture", "camera_pos", "object_texture", "floor_texture", "light", "distractors")
 F1_GAPS = (0.437, 0.423, 0.117, 0.090, 0.077, 0.053, 0.023)  # bc's mean gaps over F1's 15 cells
 F1_P_TRAIN = 0.917
+F1_EPISODES = Path(__file__).resolve().parents[1] / "docs" / "results" / "f1_ordering" / "episodes.parquet"
 SIM_GRID = candidate_grid(401)  # bounds at 0.005 of a gap, stepped outwards (the tests use 201 points)
 
 
@@ -51,6 +60,51 @@ def rule_floor(rule: StopRule, k: int) -> int:
     train, shifted = np.ones((1, rule.max_episodes)), np.zeros((1, k, rule.max_episodes))
     stops = apply_rule(train, shifted, one, grid=SIM_GRID)
     return int(stops.episodes[0, 0]) if stops.reason[0, 0] == DECIDED else -1
+
+
+def discordance(p_train: float, gap: float, copula: float) -> tuple[float, float]:
+    """``(p10, p01)`` of the simulation's paired outcomes: comonotone with probability ``copula``, else independent."""
+    p_shift = p_train - gap
+    p10 = copula * max(p_train - p_shift, 0) + (1 - copula) * p_train * (1 - p_shift)
+    p01 = copula * max(p_shift - p_train, 0) + (1 - copula) * (1 - p_train) * p_shift
+    return p10, p01
+
+
+def committed_discordance(factors: list[str], method: str = "bc") -> dict[str, tuple[float, float]]:
+    """``(p10, p01)`` per factor in F1's committed episodes of ``method``, its cells pooled."""
+    rows = pq.read_table(F1_EPISODES, columns=["method", "task", "seed", "condition", "episode_seed", "success"])
+    outcome = {
+        (r["condition"], r["task"], r["seed"], r["episode_seed"]): r["success"]
+        for r in rows.to_pylist()
+        if r["method"] == method
+    }
+    out = {}
+    for factor in factors:
+        pairs = [(outcome[("train", *k[1:])], ok) for k, ok in outcome.items() if k[0] == factor]
+        if pairs:
+            out[factor] = (
+                sum(t and not s for t, s in pairs) / len(pairs),
+                sum(s and not t for t, s in pairs) / len(pairs),
+            )
+    return out
+
+
+def power_bound(p10: float, p01: float, n: int, alpha: float) -> float:
+    """The most a test valid at ``alpha`` for a gap of 0 can declare a positive gap after ``n`` independent paired
+    episodes: the Neyman-Pearson power against the null with the same ties and ``p10 = p01``."""
+    q, tie = (p10 + p01) / 2, 1 - p10 - p01
+    outcomes = []  # (likelihood ratio, null probability, alternative probability) of (n10, n01)
+    for n10 in range(n + 1):
+        for n01 in range(n + 1 - n10):
+            ways = math.comb(n, n10) * math.comb(n - n10, n01) * tie ** (n - n10 - n01)
+            null, alternative = ways * q ** (n10 + n01), ways * p10**n10 * p01**n01
+            outcomes.append((alternative / null if null else math.inf, null, alternative))
+    size = power = 0.0
+    for _, null, alternative in sorted(outcomes, key=lambda o: -o[0]):
+        if size + null > alpha:
+            return power + alternative * (alpha - size) / null
+        size, power = size + null, power + alternative
+    return power
 
 
 def profiles(p_train: float, gaps: np.ndarray, n: int, episodes: int, copula: float, rng) -> tuple[np.ndarray, ...]:
@@ -129,6 +183,17 @@ def main() -> None:
         f"{valid_test_floor(alpha, k)} paired episodes, all favouring train; this rule first decides at {rule_floor(StopRule(1, 200, args.tolerance, args.confidence), k)}"
         " (all favouring train, blocks of 1)"
     )
+    committed = committed_discordance(args.factors)
+    for c, name in enumerate(args.factors):
+        rates = {"simulated": discordance(args.p_train, gaps[c], args.copula), "F1 committed": committed.get(name)}
+        bounds = [
+            f"{label} (p10 {p10:.3f}, p01 {p01:.3f}) <= {power_bound(p10, p01, 10, alpha / k):.1%} at 10, "
+            f"{power_bound(p10, p01, 20, alpha / k):.1%} at 20"
+            for label, pair in rates.items()
+            if pair is not None
+            for p10, p01 in [pair]
+        ]
+        print(f"power bound, {name}: " + "; ".join(bounds))
     for budget in tqdm(budgets, desc="budgets", leave=False):
         print("\n".join(compare(budget, args, gaps, rng)))
 

@@ -80,6 +80,10 @@ def test_the_hubs_documented_examples_pass_and_each_departure_is_named():
         "entry 1 names task 'gpqa_diamond', which the benchmark's eval.yaml does not declare",
     ]
     assert entry_problems([]) == ["an .eval_results file is a non-empty list of entries"]
+    twice = yaml.safe_load(HUB_ENTRIES)[1:] * 2
+    assert entry_problems(twice) == [
+        "entry 1 names task 'gpqa_diamond' again: a variant of a benchmark goes in a file of its own"
+    ]
     card = yaml.safe_load(HUB_CARDS[0])
     del card["evaluation_framework"]
     card["tasks"] += [{"id": "MathArena/aime_2026", "name": "AIME", "metric": "accuracy"}]
@@ -123,7 +127,11 @@ def test_one_file_per_model_and_set_up_every_task_declared_and_stale_files_remov
     assert {e["dataset"]["id"] for e in main + wide} == {"someone/factor-world"}
     assert card["evaluation_framework"] == eval_results.EVALUATION_FRAMEWORK and card_problems(card) == []
     assert [t["id"] for t in card["tasks"]] == ["pick-place/train", "pick-place/camera_pos", "pick-place/light"]
-    assert entry_problems(main + wide, [t["id"] for t in card["tasks"]]) == []
+    assert (
+        entry_problems(main, [t["id"] for t in card["tasks"]])
+        == entry_problems(wide, [t["id"] for t in card["tasks"]])
+        == []
+    )
 
     # two given checkpoints: each model's entries in its own folder, never in one file; the flat file is gone
     two = [*rows[:3], *(dict(r, method="act") for r in rows[:3])]
@@ -136,6 +144,12 @@ def test_one_file_per_model_and_set_up_every_task_declared_and_stale_files_remov
     assert sorted(p.relative_to(tmp_path).as_posix() for p in (tmp_path / ".eval_results").rglob("*.yaml")) == [
         ".eval_results/act/factorworld.yaml",
         ".eval_results/bc/factorworld.yaml",
+    ]
+    # one checkpoint at two N: two set-ups of the benchmark, a file each
+    two_n = [*rows[:3], *(dict(r, n_train_envs=10) for r in rows[:3])]
+    assert sorted(eval_results.eval_files(cfg, two_n)) == [
+        ".eval_results/factorworld_n10.yaml",
+        ".eval_results/factorworld_n5.yaml",
     ]
     opened, line = eval_results.open_model_pr(tmp_path, "someone/bc")  # no one model's results: before the Hub
     assert not opened and line.startswith("warning: no pull request opened on someone/bc") and "\n" not in line

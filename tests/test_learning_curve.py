@@ -10,6 +10,7 @@ from dataclasses import replace
 from pathlib import Path
 
 import pytest
+from toy_study import write_toy_study
 
 from lerobot_factorworld.core.settings import parse_config
 from lerobot_factorworld.study.metrics import newcombe_independent
@@ -21,37 +22,10 @@ from lerobot_factorworld.study.results.curve import CURVE_FILE, pooled_curve, re
 from lerobot_factorworld.study.run.inputs import EvalInputs, TrainInputs
 from lerobot_factorworld.study.run.steps import curve_saves
 
-CURVE = """
-name: curve
-out_dir: {out}
-tasks: [handle-press]
-n_train_envs: [1]
-seeds: [0]
-train_factors: [light]
-factors: []
-methods:
-  - name: bc
-    policy: {{type: bc}}
-collect:
-  demos: 2
-  max_episode_steps: 60
-  image_size: 48
-train:
-  epochs: 3
-  batch_size: 8
-  curve_every: {every}
-eval:
-  n_test_envs: 1
-  episodes: 2
-  max_episode_steps: 8
-  record_episodes: 0
-workers: 2
-"""
-
 
 def _command(tmp_path: Path, every: float = 1) -> StudyCommand:
-    path = tmp_path / f"curve_{every}.yaml"
-    path.write_text(CURVE.format(out=tmp_path / "out", every=every))
+    train, evaluation = {"epochs": 3, "curve_every": every}, {"episodes": 2}
+    path = write_toy_study(tmp_path / f"curve_{every}.yaml", tmp_path / "out", train=train, eval=evaluation, workers=2)
     return parse_config(StudyCommand, [f"--config_path={path}"], "study")
 
 

@@ -37,12 +37,17 @@ def test_a_committed_output_is_what_its_commands_print(output):
         assert proc.stdout.strip() == committed, f"{' '.join(args)} prints something else than {output} holds"
 
 
-def test_the_floor_no_valid_test_can_beat():
+def test_the_floor_and_the_power_bound_no_valid_test_can_beat():
     sys.path.insert(0, str(ROOT / "scripts"))
-    from stopping_power import rule_floor, valid_test_floor
+    from stopping_power import power_bound, rule_floor, valid_test_floor
 
     from lerobot_factorworld.study.sequential import StopRule
 
     assert valid_test_floor(0.05, 7) == 9 and valid_test_floor(0.05, 1) == 6  # 2**-9 <= 0.05/14 < 2**-8
     floor = rule_floor(StopRule(1, 100, 0.1, 0.95), 7)
     assert valid_test_floor(0.05, 7) <= floor <= 20  # the rule is valid, so never below the floor
+    # the power bound: against the null itself it is the test's level; it grows with the episodes and the gap
+    assert power_bound(0.2, 0.2, 10, 0.01) == pytest.approx(0.01)
+    assert power_bound(0.437, 0.0, 10, 0.05 / 7) < power_bound(0.437, 0.0, 20, 0.05 / 7)
+    assert power_bound(0.14, 0.023, 20, 0.05 / 7) < power_bound(0.437, 0.013, 20, 0.05 / 7) < 1
+    assert power_bound(1.0, 0.0, 9, 0.05 / 7) == 1.0  # nine discordant pairs all favouring train: always declared

@@ -8,6 +8,7 @@ import shutil
 from pathlib import Path
 
 import pytest
+from toy_study import write_toy_study
 
 from lerobot_factorworld.core.settings import parse_config
 from lerobot_factorworld.study.plan.command import StudyCommand
@@ -15,39 +16,10 @@ from lerobot_factorworld.study.plan.cost import describe, step_cost
 from lerobot_factorworld.study.plan.grid import CURVE_EPOCHS, make_plan
 from lerobot_factorworld.study.run.options import RunOptions
 
-TOY = """
-name: extend
-out_dir: {out}
-tasks: [handle-press]
-n_train_envs: [1]
-seeds: [0]
-train_factors: [light]
-factors: []
-methods:
-  - name: bc
-    policy: {{type: bc}}
-collect:
-  demos: 2
-  max_episode_steps: 60
-  image_size: 48
-train:
-  epochs: {epochs}
-  batch_size: 8
-  curve_every: 5
-  extends: {extends}
-eval:
-  n_test_envs: 1
-  episodes: 1
-  max_episode_steps: 8
-  record_episodes: 0
-workers: 1
-"""
 
-
-def _command(folder: Path, epochs: float = 20, extends: str = "[10]", name: str = "study") -> StudyCommand:
-    folder.mkdir(parents=True, exist_ok=True)
-    path = folder / f"{name}.yaml"
-    path.write_text(TOY.format(out=folder / name, epochs=epochs, extends=extends))
+def _command(folder: Path, epochs: float = 20, extends: tuple = (10,), name: str = "study") -> StudyCommand:
+    train = {"epochs": epochs, "curve_every": 5, "extends": list(extends)}
+    path = write_toy_study(folder / f"{name}.yaml", folder / name, train=train)
     return parse_config(StudyCommand, [f"--config_path={path}"], "study")
 
 
@@ -57,9 +29,9 @@ def test_a_continued_training_is_keyed_by_the_one_it_continues_and_costs_only_it
     short, long = plan.of_kind("train")
     assert (short.inputs["epochs"], long.inputs["epochs"], long.inputs["extends"]) == (10, 20, 10)
     assert "extends" not in short.inputs and long.deps[-1] == short.key  # the first link: a plain 10-epoch training
-    plain = make_plan(_command(tmp_path, epochs=10, extends="[]", name="plain").grid())
+    plain = make_plan(_command(tmp_path, epochs=10, extends=(), name="plain").grid())
     assert short.key == plain.of_kind("train")[0].key  # the same key as 10 epochs trained by any study
-    scratch = make_plan(_command(tmp_path, extends="[]", name="scratch").grid()).of_kind("train")[0]
+    scratch = make_plan(_command(tmp_path, extends=(), name="scratch").grid()).of_kind("train")[0]
     assert "extends" not in scratch.inputs and scratch.key != long.key
     # the curve's 5-epoch point is the 10-epoch training's (its key), 10 and 15 the continued one's
     by_epochs = {s.meta[CURVE_EPOCHS]: s for s in plan.curve_points()}
@@ -67,7 +39,7 @@ def test_a_continued_training_is_keyed_by_the_one_it_continues_and_costs_only_it
     assert by_epochs[5].key == plain.curve_points()[0].key
     index = {s.key: s for s in plan.steps}
     model = {"train": {"fixed_s": 0.0, "sample_s": {"bc": 1.0}}}
-    scratch_index = {s.key: s for s in make_plan(_command(tmp_path, extends="[]", name="scratch").grid()).steps}
+    scratch_index = {s.key: s for s in make_plan(_command(tmp_path, extends=(), name="scratch").grid()).steps}
     assert step_cost(long, index, model)[1] == pytest.approx(step_cost(scratch, scratch_index, model)[1] / 2)
     text = describe(cfg, plan, RunOptions(dry_run=True))
     assert "continues: bc 10 -> 20 epochs (trains only the 10 new epochs" in text and "to run)" in text
@@ -75,7 +47,7 @@ def test_a_continued_training_is_keyed_by_the_one_it_continues_and_costs_only_it
 
 @pytest.mark.parametrize(
     ("extends", "message"),
-    [("[10, 5]", "increasing epochs below train.epochs"), ("[20]", "increasing epochs"), ("[0]", "increasing")],
+    [((10, 5), "increasing epochs below train.epochs"), ((20,), "increasing epochs"), ((0,), "increasing")],
 )
 def test_bad_budgets_to_continue_are_refused_in_one_line(tmp_path, extends, message):
     with pytest.raises(ValueError, match=message):
@@ -88,7 +60,7 @@ def test_ten_epochs_continued_to_twenty_give_the_checkpoint_files_of_twenty_from
 
     from lerobot_factorworld.study.runner import run_study
 
-    scratch = _command(tmp_path, extends="[]", name="scratch")
+    scratch = _command(tmp_path, extends=(), name="scratch")
     outcome = run_study(*scratch.parts(), command="scratch")
     assert not outcome.failed, outcome.failed
     grown = _command(tmp_path, name="grown")

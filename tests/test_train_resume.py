@@ -16,33 +16,8 @@ from collections.abc import Callable
 from pathlib import Path
 
 import pytest
+from toy_study import write_toy_study
 
-TOY = """
-name: resume
-out_dir: {out}
-tasks: [handle-press]
-n_train_envs: [1]
-seeds: [0]
-train_factors: [light]
-factors: []
-methods:
-  - name: bc
-    policy: {{type: bc}}
-collect:
-  demos: 2
-  max_episode_steps: 60
-  image_size: 48
-train:
-  epochs: 40
-  batch_size: 8
-eval:
-  n_test_envs: 1
-  episodes: 1
-  max_episode_steps: 8
-  record_episodes: 0
-executor: {executor}
-workers: 1
-"""
 # Both tests read one uninterrupted run (a module fixture): one xdist worker runs them, one after the other.
 pytestmark = pytest.mark.xdist_group("train_resume")
 PASS_STEPS = 7  # ceil(51 frames / 8): the toy's two demos hold 51 frames
@@ -50,10 +25,7 @@ STEPS = 255  # ceil(40 epochs * 51 / 8)
 
 
 def _config(folder: Path, executor: str = "local") -> Path:
-    folder.mkdir(parents=True, exist_ok=True)
-    path = folder / "resume.yaml"
-    path.write_text(TOY.format(out=folder / "study", executor=executor))
-    return path
+    return write_toy_study(folder / "resume.yaml", folder / "study", train={"epochs": 40}, executor=executor)
 
 
 def _study(config: Path) -> list[str]:

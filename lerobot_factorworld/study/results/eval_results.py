@@ -117,7 +117,8 @@ def entry_problems(entries: object, task_ids: Sequence[str] | None = None) -> li
     ``task_ids`` (the benchmark's ``eval.yaml`` tasks), entries naming another task too."""
     if not isinstance(entries, list) or not entries:
         return ["an .eval_results file is a non-empty list of entries"]
-    problems = []
+    problems: list[str] = []
+    named: set[str] = set()
     for i, entry in enumerate(entries):
         where = f"entry {i}"
         problems += _field_problems(entry, HUB_ENTRY, where)
@@ -128,6 +129,11 @@ def entry_problems(entries: object, task_ids: Sequence[str] | None = None) -> li
             task = entry["dataset"].get("task_id") if isinstance(entry["dataset"], dict) else None
             if task_ids is not None and task is not None and task not in task_ids:
                 problems.append(f"{where} names task {task!r}, which the benchmark's eval.yaml does not declare")
+            if task is not None and task in named:
+                problems.append(
+                    f"{where} names task {task!r} again: a variant of a benchmark goes in a file of its own"
+                )
+            named.add(task)
         if "value" in entry and (isinstance(entry["value"], bool) or not isinstance(entry["value"], int | float)):
             problems.append(f"{where}'s value is not a number")
         if "source" in entry:
@@ -162,14 +168,19 @@ def card_problems(card: object) -> list[str]:
 def eval_files(cfg: StudyConfig, rows: Sequence[dict]) -> dict[str, list[dict]]:
     """The ``.eval_results`` files (path under the study folder: entries), one per method and set-up: the Hub
     puts variants of one benchmark in separate files, and a model repo holds its own model's only. One method
-    (a profile): ``.eval_results/factorworld.yaml``, a radius sweep's other widths in
-    ``factorworld_<factor>-<width>.yaml``; several: the same under ``.eval_results/<method>/``."""
+    (a profile): ``.eval_results/factorworld.yaml``, other set-ups beside it (``factorworld_n10.yaml`` for one
+    of several N, ``factorworld_camera_pos-wide.yaml`` for a radius sweep's width); several methods: the same
+    under ``.eval_results/<method>/``."""
     several = len({r["method"] for r in rows}) > 1
+    n_values = {m: {int(r["n_train_envs"]) for r in rows if r["method"] == m} for m in {r["method"] for r in rows}}
     files: dict[str, list[dict]] = {}
     for row, entry in zip(rows, eval_entries(cfg, rows), strict=True):
         folder = f"{EVAL_RESULTS_DIR}/{row['method']}" if several else EVAL_RESULTS_DIR
-        variant = "" if row["widths"] == "default" else "_" + row["widths"].replace("=", "-").replace(",", "_")
-        files.setdefault(f"{folder}/{Path(EVAL_RESULTS_FILE).stem}{variant}.yaml", []).append(entry)
+        variant = [f"n{row['n_train_envs']}"] if len(n_values[row["method"]]) > 1 else []
+        if row["widths"] != "default":
+            variant.append(row["widths"].replace("=", "-").replace(",", "_"))
+        name = "_".join([Path(EVAL_RESULTS_FILE).stem, *variant])
+        files.setdefault(f"{folder}/{name}.yaml", []).append(entry)
     return files
 
 
