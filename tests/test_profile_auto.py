@@ -121,6 +121,14 @@ def test_an_auto_profile_stops_each_condition_keeps_every_episode_and_says_why(f
     assert {t["id"] for t in card["tasks"]} == {e["dataset"]["task_id"] for e in entries}
     assert card_problems(card) == [] and entry_problems(entries, [t["id"] for t in card["tasks"]]) == []
     assert {e["dataset"]["id"] for e in entries} == {"someone/factor-world"}  # --hub_benchmark
+    # factorworld report, from the written files alone, writes the same Hub files
+    from lerobot_factorworld.study.report.write import regenerate_report
+
+    written = {p: p.read_bytes() for p in [out / "eval.yaml", *(out / ".eval_results").glob("*.yaml")]}
+    for path in written:
+        path.unlink()
+    regenerate_report(str(out / "results.csv"), None, None)
+    assert {p: p.read_bytes() for p in written} == written
     import datasets
 
     loaded = datasets.load_dataset("parquet", data_files=str(out / "episodes.parquet"), split="train")
