@@ -1,28 +1,33 @@
 """When ``eval.episodes=auto`` saves episodes: its stopping rule (lerobot_factorworld/study/sequential.py) on
-simulated profiles of one checkpoint, against a fixed number of episodes per condition equal to its budget.
+simulated profiles of one checkpoint, against a fixed number of episodes per condition equal to its budget, and
+what no valid test can do with fewer episodes.
 
-Three parts:
+Four parts:
 
-1. The floor. No valid test of a paired gap, sequential or fixed-n, that declares either sign at ``alpha/(2k)``
-   each (as this rule and a corrected two-sided interval do) can declare a gap before ``n`` paired episodes with
-   ``2**-n <= alpha / (2k)``: a condition with no gap, whose paired differences are +1 or -1 with probability 1/2
-   each, shows ``n`` differences of +1 with probability ``2**-n``. With 7 factors at 95% that is 9 episodes, and
-   at 9 every one of them must favour train. The rule's own floor (the first look at which
-   differences that are all +1 decide) is printed beside it.
+1. The floor. A non-randomised test that declares each sign at ``alpha/(2k)`` (as this rule and a corrected
+   two-sided interval do) cannot declare a gap from ``n`` paired episodes that all favour train unless
+   ``2**-n <= alpha/(2k)``: a condition with no gap, whose paired differences are +1 or -1 with probability 1/2
+   each, shows ``n`` differences of +1 with probability ``2**-n``. With 7 factors at 95% that is 9 episodes. The
+   rule's own floor (the first look at which differences that are all +1 decide) is printed beside it.
 2. The power bound. For independent paired episodes whose discordant pairs (train succeeds and the shift fails,
-   or the reverse) come at rates ``p10`` and ``p01``, no test valid at ``alpha/k`` for a gap of 0 declares a
-   positive gap after ``n`` episodes more often than the most powerful test (Neyman-Pearson, randomised at the
-   boundary) of the one null that keeps the ties and splits the discordant rate evenly: any valid test must hold
-   its level there too. Printed at ``n`` = 10 and 20 for the simulation's rates and for the rates in F1's
+   or the reverse) come at rates ``p10`` and ``p01``, no test valid at ``alpha/k`` for a gap of 0 (randomised or
+   not, sequential or fixed-n) declares a gap (either sign) within ``n`` episodes more often than the most powerful
+   test (Neyman-Pearson) of the one null that keeps the ties and splits the discordant rate evenly: a valid test
+   holds its level there too. Printed at ``n`` = 10 and 20 for the simulation's rates and for the rates of F1's
    committed episodes (bc, its 15 cells pooled: docs/results/f1_ordering/episodes.parquet).
-3. Profiles simulated as the tests simulate them (tests/test_sequential.py): each episode seed has one latent
-   difficulty that, with probability ``--copula``, decides every condition's outcome, else each condition
-   draws its own. The default train success rate and gaps are F1's bc means (docs/results/f1_ordering:
-   P_T 0.917; gaps 0.437 table_pos, 0.423 table_texture, 0.117 camera_pos, 0.090 object_texture,
-   0.077 floor_texture, 0.053 light, 0.023 distractors). For each budget, it prints the share of the fixed
-   design's episodes the rule runs, and how often each condition is decided by the rule and by the fixed-n
-   analysis at the budget: Newcombe's paired 95% interval uncorrected, as results.csv has it, and corrected
-   (Bonferroni over the ``k`` conditions, the family-wise guarantee the rule gives, without its peeking).
+3. The bound per cell. F1's committed cells (method, task, seed) differ: each cell's bound at 10 episodes from its
+   own rates (estimated from its 20 paired episodes), summed over the cell's factors, is the most decisions any
+   test valid at ``alpha/k`` can be expected to make at half F1's episodes, if those rates were the truth. Printed
+   beside the decisions of Newcombe's paired interval on all 20 episodes, uncorrected and corrected.
+4. Profiles simulated as the tests simulate them (tests/test_sequential.py): each condition's outcome of an
+   episode seed comes, with probability ``--copula``, from one latent difficulty of that seed shared by every
+   condition, else from the condition's own draw (so train and a shift share it with probability copula**2).
+   The default train success rate and gaps are F1's bc means (P_T 0.917; gaps 0.437 table_pos, 0.423
+   table_texture, 0.117 camera_pos, 0.090 object_texture, 0.077 floor_texture, 0.053 light, 0.023 distractors).
+   For each budget, it prints the share of the fixed design's episodes the rule runs, and how often each
+   condition is decided by the rule and by the fixed-n analysis at the budget: Newcombe's paired 95% interval
+   uncorrected, as results.csv has it, and corrected (Bonferroni over the ``k`` conditions, the family-wise
+   guarantee the rule gives, without its stopping).
 
     python scripts/stopping_power.py [--profiles 400] [--budgets 20,40,100,200] [--block 5] [--tolerance 0.1]
 """
@@ -63,35 +68,71 @@ def rule_floor(rule: StopRule, k: int) -> int:
 
 
 def discordance(p_train: float, gap: float, copula: float) -> tuple[float, float]:
-    """``(p10, p01)`` of the simulation's paired outcomes: comonotone with probability ``copula``, else independent."""
-    p_shift = p_train - gap
-    p10 = copula * max(p_train - p_shift, 0) + (1 - copula) * p_train * (1 - p_shift)
-    p01 = copula * max(p_shift - p_train, 0) + (1 - copula) * (1 - p_train) * p_shift
+    """``(p10, p01)`` of the simulation's paired outcomes (:func:`profiles`): comonotone when both conditions
+    use the shared difficulty (probability ``copula**2``), else independent."""
+    p_shift, shared = p_train - gap, copula**2
+    p10 = shared * max(p_train - p_shift, 0) + (1 - shared) * p_train * (1 - p_shift)
+    p01 = shared * max(p_shift - p_train, 0) + (1 - shared) * (1 - p_train) * p_shift
     return p10, p01
+
+
+def committed_pairs(method: str | None = None) -> dict[tuple, dict[str, list[tuple[bool, bool]]]]:
+    """F1's committed paired outcomes: (method, task, seed) -> factor -> [(train, shift)] in episode-seed order."""
+    columns = ["method", "task", "seed", "condition", "episode_seed", "success"]
+    rows = [r for r in pq.read_table(F1_EPISODES, columns=columns).to_pylist() if method in (None, r["method"])]
+    outcome = {(r["method"], r["task"], r["seed"], r["condition"], r["episode_seed"]): r["success"] for r in rows}
+    cells: dict[tuple, dict[str, list[tuple[bool, bool]]]] = {}
+    for (m, task, seed, condition, episode), ok in sorted(outcome.items()):
+        if condition != "train":
+            cells.setdefault((m, task, seed), {}).setdefault(condition, []).append(
+                (outcome[(m, task, seed, "train", episode)], ok)
+            )
+    return cells
+
+
+def rates(pairs: list[tuple[bool, bool]]) -> tuple[float, float]:
+    """``(p10, p01)``: the shares of pairs where only train succeeds, and only the shift."""
+    return sum(t and not s for t, s in pairs) / len(pairs), sum(s and not t for t, s in pairs) / len(pairs)
 
 
 def committed_discordance(factors: list[str], method: str = "bc") -> dict[str, tuple[float, float]]:
     """``(p10, p01)`` per factor in F1's committed episodes of ``method``, its cells pooled."""
-    rows = pq.read_table(F1_EPISODES, columns=["method", "task", "seed", "condition", "episode_seed", "success"])
-    outcome = {
-        (r["condition"], r["task"], r["seed"], r["episode_seed"]): r["success"]
-        for r in rows.to_pylist()
-        if r["method"] == method
-    }
-    out = {}
-    for factor in factors:
-        pairs = [(outcome[("train", *k[1:])], ok) for k, ok in outcome.items() if k[0] == factor]
-        if pairs:
-            out[factor] = (
-                sum(t and not s for t, s in pairs) / len(pairs),
-                sum(s and not t for t, s in pairs) / len(pairs),
-            )
-    return out
+    pooled: dict[str, list[tuple[bool, bool]]] = {}
+    for by_factor in committed_pairs(method).values():
+        for factor, pairs in by_factor.items():
+            pooled.setdefault(factor, []).extend(pairs)
+    return {factor: rates(pooled[factor]) for factor in factors if factor in pooled}
+
+
+def per_cell_bound(n: int, alpha: float) -> str:
+    """The expected decisions at ``n`` episodes that no test valid at ``alpha/k`` exceeds, over F1's cells, each at
+    its own rates, beside Newcombe's decisions on all the committed episodes."""
+    bound = fixed = corrected = conditions = 0.0
+    cells = committed_pairs()
+    for by_factor in cells.values():
+        k = len(by_factor)
+        z = NormalDist().inv_cdf(1 - alpha / (2 * k))
+        for pairs in by_factor.values():
+            p10, p01 = rates(pairs)
+            # declaring either sign is one test of the null, at alpha/k in all: the bound holds for it as it is
+            bound += power_bound(p10, p01, n, alpha / k)
+            train, shift = [t for t, _ in pairs], [s for _, s in pairs]
+            for z_level, counter in ((None, "fixed"), (z, "corrected")):
+                _, low, high = paired_gap(train, shift) if z_level is None else paired_gap(train, shift, z=z_level)
+                if low > 0 or high < 0:
+                    fixed, corrected = (fixed + 1, corrected) if counter == "fixed" else (fixed, corrected + 1)
+            conditions += 1
+    return (
+        f"per cell: F1's {len(cells)} committed cells, {int(conditions)} conditions: at {n} episodes no test valid "
+        f"at {alpha:g}/k makes more than {bound:.1f} decisions in expectation (each cell's own rates as the truth); "
+        f"Newcombe's interval on all 20 episodes decides {int(corrected)} corrected, {int(fixed)} uncorrected"
+    )
 
 
 def power_bound(p10: float, p01: float, n: int, alpha: float) -> float:
-    """The most a test valid at ``alpha`` for a gap of 0 can declare a positive gap after ``n`` independent paired
-    episodes: the Neyman-Pearson power against the null with the same ties and ``p10 = p01``."""
+    """The most often a test valid at ``alpha`` for a gap of 0 can declare a gap (of either sign: any rejection)
+    within ``n`` independent paired episodes: the Neyman-Pearson power against the null with the same ties and
+    ``p10 = p01``."""
     q, tie = (p10 + p01) / 2, 1 - p10 - p01
     outcomes = []  # (likelihood ratio, null probability, alternative probability) of (n10, n01)
     for n10 in range(n + 1):
@@ -179,7 +220,7 @@ def main() -> None:
         f"interval at the budget, uncorrected and corrected (Bonferroni over the {k})"
     )
     print(
-        f"floor: no valid test declaring either sign at {alpha:g}/(2x{k}) declares a gap before "
+        f"floor: no valid non-randomised test declaring each sign at {alpha:g}/(2x{k}) declares a gap before "
         f"{valid_test_floor(alpha, k)} paired episodes, all favouring train; this rule first decides at {rule_floor(StopRule(1, 200, args.tolerance, args.confidence), k)}"
         " (all favouring train, blocks of 1)"
     )
@@ -194,6 +235,7 @@ def main() -> None:
             for p10, p01 in [pair]
         ]
         print(f"power bound, {name}: " + "; ".join(bounds))
+    print(per_cell_bound(10, alpha))
     for budget in tqdm(budgets, desc="budgets", leave=False):
         print("\n".join(compare(budget, args, gaps, rng)))
 

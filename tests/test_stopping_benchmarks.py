@@ -39,7 +39,7 @@ def test_a_committed_output_is_what_its_commands_print(output):
 
 def test_the_floor_and_the_power_bound_no_valid_test_can_beat():
     sys.path.insert(0, str(ROOT / "scripts"))
-    from stopping_power import power_bound, rule_floor, valid_test_floor
+    from stopping_power import discordance, power_bound, profiles, rule_floor, valid_test_floor
 
     from lerobot_factorworld.study.sequential import StopRule
 
@@ -51,3 +51,11 @@ def test_the_floor_and_the_power_bound_no_valid_test_can_beat():
     assert power_bound(0.437, 0.0, 10, 0.05 / 7) < power_bound(0.437, 0.0, 20, 0.05 / 7)
     assert power_bound(0.14, 0.023, 20, 0.05 / 7) < power_bound(0.437, 0.013, 20, 0.05 / 7) < 1
     assert power_bound(1.0, 0.0, 9, 0.05 / 7) == 1.0  # nine discordant pairs all favouring train: always declared
+    # the simulation's discordant-pair rates are those of the outcomes it draws
+    import numpy as np
+
+    train, shifted = profiles(0.9, np.array([0.4, 0.05]), 400, 500, 0.6, np.random.default_rng(0))
+    for c, gap in enumerate((0.4, 0.05)):
+        p10, p01 = discordance(0.9, gap, 0.6)
+        assert (train * (1 - shifted[:, c])).mean() == pytest.approx(p10, abs=0.005)
+        assert ((1 - train) * shifted[:, c]).mean() == pytest.approx(p01, abs=0.005)
