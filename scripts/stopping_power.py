@@ -51,7 +51,7 @@ F1_FACTORS = ("table_pos", "table_texture", "camera_pos", "object_texture", "flo
 F1_GAPS = (0.437, 0.423, 0.117, 0.090, 0.077, 0.053, 0.023)  # bc's mean gaps over F1's 15 cells
 F1_P_TRAIN = 0.917
 F1_EPISODES = Path(__file__).resolve().parents[1] / "docs" / "results" / "f1_ordering" / "episodes.parquet"
-SIM_GRID = candidate_grid(401)  # bounds at 0.005 of a gap, stepped outwards (the tests use 201 points)
+SIM_POINTS = 401  # candidate means of the simulations (bounds stepped outwards to them); shipped: confseq.GRID_POINTS
 
 
 def valid_test_floor(alpha: float, k: int) -> int:
@@ -63,7 +63,7 @@ def rule_floor(rule: StopRule, k: int) -> int:
     """The first look of ``rule`` (blocks of 1) at which paired differences that are all +1 decide a gap."""
     one = StopRule(1, rule.max_episodes, rule.tolerance, rule.confidence)
     train, shifted = np.ones((1, rule.max_episodes)), np.zeros((1, k, rule.max_episodes))
-    stops = apply_rule(train, shifted, one, grid=SIM_GRID)
+    stops = apply_rule(train, shifted, one, grid=candidate_grid(SIM_POINTS))
     return int(stops.episodes[0, 0]) if stops.reason[0, 0] == DECIDED else -1
 
 
@@ -160,7 +160,7 @@ def profiles(p_train: float, gaps: np.ndarray, n: int, episodes: int, copula: fl
 def compare(budget: int, args, gaps: np.ndarray, rng) -> list[str]:
     rule = StopRule(args.block, budget, args.tolerance, args.confidence)
     train, shifted = profiles(args.p_train, gaps, args.profiles, budget, args.copula, rng)
-    stops = apply_rule(train, shifted, rule, grid=SIM_GRID)
+    stops = apply_rule(train, shifted, rule, grid=candidate_grid(args.grid_points))
     used = stops.episodes.max(axis=1) + stops.episodes.sum(axis=1)  # train runs as long as its longest condition
     share = used.mean() / ((len(gaps) + 1) * budget)
     fixed = np.zeros(stops.episodes.shape, dtype=bool)
@@ -203,6 +203,7 @@ def main() -> None:
     parser.add_argument("--factors", default=",".join(F1_FACTORS))
     parser.add_argument("--copula", type=float, default=0.6)
     parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--grid_points", type=int, default=SIM_POINTS, help="candidate means (shipped: 2001)")
     args = parser.parse_args()
     gaps = np.array([float(g) for g in args.gaps.split(",")])
     args.factors = args.factors.split(",")
@@ -216,7 +217,7 @@ def main() -> None:
     print(
         f"stopping power of eval.episodes=auto: {k} shifted conditions, P_T {args.p_train}, block {args.block}, "
         f"tolerance {args.tolerance}, confidence {args.confidence} (Bonferroni over the {k}), {args.profiles} "
-        f"simulated profiles per budget (copula {args.copula}, seed {args.seed}); fixed-n = Newcombe's paired 95% "
+        f"simulated profiles per budget (copula {args.copula}, seed {args.seed}, {args.grid_points} candidate means); fixed-n = Newcombe's paired 95% "
         f"interval at the budget, uncorrected and corrected (Bonferroni over the {k})"
     )
     print(
