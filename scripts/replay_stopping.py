@@ -117,6 +117,9 @@ def main() -> None:
         unique.update({cell[0]: cell for cell in replayed})
     cells = list(unique.values())
     used, committed = sum(c[1] for c in cells), sum(c[2] for c in cells)
+    if not committed:
+        print("\nall: no cell to replay")
+        return
     print(
         f"\nall ({len(cells)} distinct cells): {used}/{committed} episodes ({used / committed:.1%}); "
         + _agreement_lines(cells)

@@ -50,6 +50,7 @@ from lerobot_factorworld.study.sequential import DECIDED, StopRule, apply_rule
 F1_FACTORS = ("table_pos", "table_texture", "camera_pos", "object_texture", "floor_texture", "light", "distractors")
 F1_GAPS = (0.437, 0.423, 0.117, 0.090, 0.077, 0.053, 0.023)  # bc's mean gaps over F1's 15 cells
 F1_P_TRAIN = 0.917
+CELL = ("method", "task", "n_train_envs", "seed", "widths")  # a cell of F1's grid, as the replay has it
 F1_EPISODES = Path(__file__).resolve().parents[1] / "docs" / "results" / "f1_ordering" / "episodes.parquet"
 SIM_POINTS = 401  # candidate means of the simulations (bounds stepped outwards to them); shipped: confseq.GRID_POINTS
 
@@ -59,34 +60,33 @@ def valid_test_floor(alpha: float, k: int) -> int:
     return math.ceil(math.log2(2 * k / alpha))
 
 
-def rule_floor(rule: StopRule, k: int) -> int:
+def rule_floor(rule: StopRule, k: int, points: int = SIM_POINTS) -> int:
     """The first look of ``rule`` (blocks of 1) at which paired differences that are all +1 decide a gap."""
     one = StopRule(1, rule.max_episodes, rule.tolerance, rule.confidence)
     train, shifted = np.ones((1, rule.max_episodes)), np.zeros((1, k, rule.max_episodes))
-    stops = apply_rule(train, shifted, one, grid=candidate_grid(SIM_POINTS))
+    stops = apply_rule(train, shifted, one, grid=candidate_grid(points))
     return int(stops.episodes[0, 0]) if stops.reason[0, 0] == DECIDED else -1
 
 
 def discordance(p_train: float, gap: float, copula: float) -> tuple[float, float]:
     """``(p10, p01)`` of the simulation's paired outcomes (:func:`profiles`): comonotone when both conditions
     use the shared difficulty (probability ``copula**2``), else independent."""
-    p_shift, shared = p_train - gap, copula**2
+    p_shift, shared = p_train - float(np.clip(gap, p_train - 1, p_train)), copula**2  # as profiles() clips it
     p10 = shared * max(p_train - p_shift, 0) + (1 - shared) * p_train * (1 - p_shift)
     p01 = shared * max(p_shift - p_train, 0) + (1 - shared) * (1 - p_train) * p_shift
     return p10, p01
 
 
 def committed_pairs(method: str | None = None) -> dict[tuple, dict[str, list[tuple[bool, bool]]]]:
-    """F1's committed paired outcomes: (method, task, seed) -> factor -> [(train, shift)] in episode-seed order."""
-    columns = ["method", "task", "seed", "condition", "episode_seed", "success"]
+    """F1's committed paired outcomes: cell (``CELL``) -> factor -> [(train, shift)] in episode-seed order."""
+    columns = [*CELL, "condition", "episode_seed", "success"]
     rows = [r for r in pq.read_table(F1_EPISODES, columns=columns).to_pylist() if method in (None, r["method"])]
-    outcome = {(r["method"], r["task"], r["seed"], r["condition"], r["episode_seed"]): r["success"] for r in rows}
+    outcome = {(*(r[c] for c in CELL), r["condition"], r["episode_seed"]): r["success"] for r in rows}
     cells: dict[tuple, dict[str, list[tuple[bool, bool]]]] = {}
-    for (m, task, seed, condition, episode), ok in sorted(outcome.items()):
+    for (*cell, condition, episode), ok in sorted(outcome.items()):
         if condition != "train":
-            cells.setdefault((m, task, seed), {}).setdefault(condition, []).append(
-                (outcome[(m, task, seed, "train", episode)], ok)
-            )
+            pair = (outcome[(*cell, "train", episode)], ok)
+            cells.setdefault(tuple(cell), {}).setdefault(condition, []).append(pair)
     return cells
 
 
@@ -109,6 +109,7 @@ def per_cell_bound(n: int, alpha: float) -> str:
     its own rates, beside Newcombe's decisions on all the committed episodes."""
     bound = fixed = corrected = conditions = 0.0
     cells = committed_pairs()
+    lengths = sorted({len(pairs) for by_factor in cells.values() for pairs in by_factor.values()})
     for by_factor in cells.values():
         k = len(by_factor)
         z = NormalDist().inv_cdf(1 - alpha / (2 * k))
@@ -125,7 +126,8 @@ def per_cell_bound(n: int, alpha: float) -> str:
     return (
         f"per cell: F1's {len(cells)} committed cells, {int(conditions)} conditions: at {n} episodes no test valid "
         f"at {alpha:g}/k makes more than {bound:.1f} decisions in expectation (each cell's own rates as the truth); "
-        f"Newcombe's interval on all 20 episodes decides {int(corrected)} corrected, {int(fixed)} uncorrected"
+        f"Newcombe's interval on all {'/'.join(map(str, lengths))} episodes decides {int(corrected)} corrected, "
+        f"{int(fixed)} uncorrected"
     )
 
 
@@ -180,7 +182,7 @@ def compare(budget: int, args, gaps: np.ndarray, rng) -> list[str]:
         f"budget {budget}: auto runs {share:.1%} of the fixed design's episodes (train {stops.episodes.max(axis=1).mean():.1f}"
         f" per profile); conditions decided per profile by auto / fixed-n / fixed-n corrected: "
         f"{auto.sum(axis=1).mean():.2f} / {fixed.sum(axis=1).mean():.2f} / {corrected.sum(axis=1).mean():.2f}; "
-        f"auto's decision that of fixed-n corrected {same:.1%}; auto's wrong signs {(auto & (sign < 0)).sum()}",
+        f"auto's decision that of fixed-n corrected {same:.1%}; auto's wrong signs {(auto & (sign != np.sign(gaps))).sum()}",
     ]
     for c, name in enumerate(args.factors):
         lines.append(
@@ -222,7 +224,7 @@ def main() -> None:
     )
     print(
         f"floor: no valid non-randomised test declaring each sign at {alpha:g}/(2x{k}) declares a gap before "
-        f"{valid_test_floor(alpha, k)} paired episodes, all favouring train; this rule first decides at {rule_floor(StopRule(1, 200, args.tolerance, args.confidence), k)}"
+        f"{valid_test_floor(alpha, k)} paired episodes, all favouring train; this rule first decides at {rule_floor(StopRule(1, 200, args.tolerance, args.confidence), k, args.grid_points)}"
         " (all favouring train, blocks of 1)"
     )
     committed = committed_discordance(args.factors)

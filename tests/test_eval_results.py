@@ -74,12 +74,15 @@ def test_the_hubs_documented_examples_pass_and_each_departure_is_named():
     entries[0]["source"] = {"name": "no url"}
     assert entry_problems(entries, ["default"]) == [
         "entry 0's dataset has split, not a documented field",
-        "entry 0's value is not a number",
+        "entry 0's value is not a finite number",
         "entry 0's source lacks url",
         "entry 1 lacks value",
         "entry 1 names task 'gpqa_diamond', which the benchmark's eval.yaml does not declare",
     ]
     assert entry_problems([]) == ["an .eval_results file is a non-empty list of entries"]
+    assert entry_problems([{"dataset": {"id": "a/b", "task_id": "t"}, "value": math.nan}]) == [
+        "entry 0's value is not a finite number"
+    ]
     twice = yaml.safe_load(HUB_ENTRIES)[1:] * 2
     assert entry_problems(twice) == [
         "entry 1 names task 'gpqa_diamond' again: a variant of a benchmark goes in a file of its own"
@@ -133,17 +136,20 @@ def test_one_file_per_model_and_set_up_every_task_declared_and_stale_files_remov
         == []
     )
 
-    # two given checkpoints: each model's entries in its own folder, never in one file; the flat file is gone
-    two = [*rows[:3], *(dict(r, method="act") for r in rows[:3])]
+    # two given checkpoints: each model's entries in its own folder, never in one file; the flat files are gone,
+    # a file of the user's own stays, and a method's name cannot lead outside the folder
+    (tmp_path / ".eval_results" / "mine.yaml").write_text("- value: 1\n")
+    two = [*rows[:3], *(dict(r, method="../act") for r in rows[:3])]
     written = eval_results.write_eval_results(cfg, two, tmp_path)
     assert sorted(p.relative_to(tmp_path).as_posix() for p in written) == [
-        ".eval_results/act/factorworld.yaml",
+        ".eval_results/_act/factorworld.yaml",
         ".eval_results/bc/factorworld.yaml",
         "eval.yaml",
     ]
     assert sorted(p.relative_to(tmp_path).as_posix() for p in (tmp_path / ".eval_results").rglob("*.yaml")) == [
-        ".eval_results/act/factorworld.yaml",
+        ".eval_results/_act/factorworld.yaml",
         ".eval_results/bc/factorworld.yaml",
+        ".eval_results/mine.yaml",
     ]
     # one checkpoint at two N: two set-ups of the benchmark, a file each
     two_n = [*rows[:3], *(dict(r, n_train_envs=10) for r in rows[:3])]

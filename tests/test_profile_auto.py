@@ -5,6 +5,7 @@ fixed-n intervals refuses auto in one line."""
 
 import csv
 import json
+import time
 
 import pytest
 
@@ -60,7 +61,9 @@ def test_an_auto_profile_stops_each_condition_keeps_every_episode_and_says_why(f
     profile = _config(
         factorworld_checkpoint, out, *AUTO, "--eval.tolerance=0.6", "--hub_benchmark=someone/factor-world"
     )
+    start = time.perf_counter()
     outcome = run_study(profile.study(), profile.options(), "factorworld profile ...")
+    wall = time.perf_counter() - start
     assert outcome.ran["eval"] == 3 and not outcome.failed
     plan = make_plan(profile.study())
     results = {r["condition"]: r for r in (read_result(s, out) for s in plan.evaluations())}
@@ -76,6 +79,8 @@ def test_an_auto_profile_stops_each_condition_keeps_every_episode_and_says_why(f
             and 0 < round(result["timings"]["total"], 2) == result["seconds"]
         )
         assert result["timings"]["env_step"] + result["timings"]["policy"] < result["timings"]["total"]
+        assert result["episodes_run"] == len(result["successes"]) == 6
+    assert sum(r["seconds"] for r in results.values()) <= wall  # the group's time split, never counted twice
     from lerobot_factorworld.study.plan.cost import fit_constants
 
     # every episode runs to its 4-step limit: the refit's fraction of the horizon counts the episodes each ran
@@ -98,6 +103,17 @@ def test_an_auto_profile_stops_each_condition_keeps_every_episode_and_says_why(f
     assert all(is_done(step, out) for step in plan.steps)
     again = run_study(profile.study(), profile.options(), "factorworld profile ...")
     assert again.ran["eval"] == 0
+    # a group interrupted after its blocks but before its results: rerun, it reads every block back and runs
+    # none again, and its cost says so (the cost model's refit counts only the episodes a run ran)
+    for step in plan.evaluations():
+        (step.folder(out) / "result.json").unlink()
+    resumed = run_study(profile.study(), profile.options(), "factorworld profile ...")
+    assert resumed.ran["eval"] == 3
+    reread = {r["condition"]: r for r in (read_result(s, out) for s in plan.evaluations())}
+    for condition, result in reread.items():
+        assert result["successes"] == results[condition]["successes"] and result["seeds"] == results[condition]["seeds"]
+        assert result["episodes_run"] == 0 and result["env_steps"] == 0
+    assert fit_constants(plan, out)["eval"]["episode_fraction"].get("pick-place") != 0
 
     # results where the Hub shows them: one entry per task and condition, the documented fields
     import yaml

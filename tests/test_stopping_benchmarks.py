@@ -5,6 +5,8 @@ committed episodes), so a change to the rule or to the episodes that moves a quo
 
 from __future__ import annotations
 
+import importlib.util
+import math
 import shlex
 import subprocess
 import sys
@@ -38,8 +40,11 @@ def test_a_committed_output_is_what_its_commands_print(output):
 
 
 def test_the_floor_and_the_power_bound_no_valid_test_can_beat():
-    sys.path.insert(0, str(ROOT / "scripts"))
-    from stopping_power import discordance, power_bound, profiles, rule_floor, valid_test_floor
+    spec = importlib.util.spec_from_file_location("stopping_power", ROOT / "scripts" / "stopping_power.py")
+    script = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(script)
+    discordance, power_bound, profiles = script.discordance, script.power_bound, script.profiles
+    rule_floor, valid_test_floor = script.rule_floor, script.valid_test_floor
 
     from lerobot_factorworld.study.sequential import StopRule
 
@@ -51,6 +56,12 @@ def test_the_floor_and_the_power_bound_no_valid_test_can_beat():
     assert power_bound(0.437, 0.0, 10, 0.05 / 7) < power_bound(0.437, 0.0, 20, 0.05 / 7)
     assert power_bound(0.14, 0.023, 20, 0.05 / 7) < power_bound(0.437, 0.013, 20, 0.05 / 7) < 1
     assert power_bound(1.0, 0.0, 9, 0.05 / 7) == 1.0  # nine discordant pairs all favouring train: always declared
+    # no ties: the randomised binomial test of 1/2, written out (10 pairs at 0.05: n10 >= 9, and n10 = 8 in part)
+    null = [math.comb(10, j) / 2**10 for j in range(11)]
+    part = (0.05 - null[9] - null[10]) / null[8]
+    alternative = [math.comb(10, j) * 0.8**j * 0.2 ** (10 - j) for j in range(11)]
+    expected = alternative[9] + alternative[10] + part * alternative[8]
+    assert power_bound(0.8, 0.2, 10, 0.05) == pytest.approx(expected, rel=1e-9)
     # the simulation's discordant-pair rates are those of the outcomes it draws
     import numpy as np
 

@@ -35,6 +35,7 @@ from ...core.io import atomic_write_json
 from ...envs.lerobot_obs import LEROBOT_METAWORLD_OBS
 from ...scene.build import DEFAULT_QUALITY
 from ...tasks import get_task, step_limit
+from ..run.blocks import EPISODES_RUN
 from ..run.checkpoint import GIVEN_CHECKPOINT, checkpoint_problems, local_folder, read_policy_config
 from ..run.executors import task_units
 from ..run.inputs import CollectInputs, EnvInputs, EvalInputs, TrainInputs
@@ -370,8 +371,11 @@ def fit_constants(plan: Plan, study_dir: str | Path) -> dict[str, Any]:
             horizon = step_limit(task, inputs.max_episode_steps)
             work["eval"] += variable
             units["eval"] += result.get("env_steps", 0)
-            ran = len(result.get("successes", ())) or inputs.episodes  # under auto, ``episodes`` is the budget
-            steps_run.setdefault(task, []).extend([result.get("env_steps", 0), ran * horizon])
+            # the episodes whose environment steps it counted: under auto, not its budget, and not the blocks a
+            # resumed group read back (EPISODES_RUN); none, and it says nothing of the episodes' length
+            ran = result.get(EPISODES_RUN, len(result.get("successes", ())) or inputs.episodes)
+            if ran:
+                steps_run.setdefault(task, []).extend([result.get("env_steps", 0), ran * horizon])
     old = load_model()
     model = json.loads(json.dumps(old))  # kinds a study did not run keep their constants
     for kind in KINDS:

@@ -17,6 +17,7 @@ time (beta, allow-listed, and ``evaluation_framework`` an enumerable the Hub mai
 from __future__ import annotations
 
 import math
+import re
 from collections.abc import Sequence
 from pathlib import Path
 
@@ -134,8 +135,11 @@ def entry_problems(entries: object, task_ids: Sequence[str] | None = None) -> li
                     f"{where} names task {task!r} again: a variant of a benchmark goes in a file of its own"
                 )
             named.add(task)
-        if "value" in entry and (isinstance(entry["value"], bool) or not isinstance(entry["value"], int | float)):
-            problems.append(f"{where}'s value is not a number")
+        value = entry.get("value")
+        if "value" in entry and (
+            isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value)
+        ):
+            problems.append(f"{where}'s value is not a finite number")
         if "source" in entry:
             problems += _field_problems(entry["source"], HUB_ENTRY_SOURCE, f"{where}'s source")
         for name in ("date", "notes", "verifyToken"):
@@ -175,13 +179,18 @@ def eval_files(cfg: StudyConfig, rows: Sequence[dict]) -> dict[str, list[dict]]:
     n_values = {m: {int(r["n_train_envs"]) for r in rows if r["method"] == m} for m in {r["method"] for r in rows}}
     files: dict[str, list[dict]] = {}
     for row, entry in zip(rows, eval_entries(cfg, rows), strict=True):
-        folder = f"{EVAL_RESULTS_DIR}/{row['method']}" if several else EVAL_RESULTS_DIR
+        folder = f"{EVAL_RESULTS_DIR}/{_safe_name(row['method'])}" if several else EVAL_RESULTS_DIR
         variant = [f"n{row['n_train_envs']}"] if len(n_values[row["method"]]) > 1 else []
         if row["widths"] != "default":
             variant.append(row["widths"].replace("=", "-").replace(",", "_"))
         name = "_".join([Path(EVAL_RESULTS_FILE).stem, *variant])
         files.setdefault(f"{folder}/{name}.yaml", []).append(entry)
     return files
+
+
+def _safe_name(name: str) -> str:
+    """``name`` as one folder name: characters other than letters, digits, ``_ . -`` become ``_``, no leading dot."""
+    return re.sub(r"[^A-Za-z0-9_.-]", "_", name).lstrip(".") or "_"
 
 
 def write_eval_results(cfg: StudyConfig, rows: Sequence[dict], out_dir: Path) -> list[Path]:
@@ -207,9 +216,12 @@ def write_eval_results(cfg: StudyConfig, rows: Sequence[dict], out_dir: Path) ->
     for name, entries in files.items():
         (out_dir / name).parent.mkdir(parents=True, exist_ok=True)
         written.append(atomic_write_text(out_dir / name, yaml.safe_dump(entries, **dump)))
-    for old in (out_dir / EVAL_RESULTS_DIR).rglob("*.yaml"):
+    stem = Path(EVAL_RESULTS_FILE).stem
+    for old in (out_dir / EVAL_RESULTS_DIR).rglob(f"{stem}*.yaml"):  # ours only: a user's own files stay
         if old not in written:
             old.unlink()
+            if old.parent != out_dir / EVAL_RESULTS_DIR and not any(old.parent.iterdir()):
+                old.parent.rmdir()
     return [*written, atomic_write_text(out_dir / BENCHMARK_CARD, yaml.safe_dump(card, **dump))]
 
 
@@ -220,7 +232,7 @@ def open_model_pr(study_dir: str | Path, model_repo_id: str) -> tuple[bool, str]
     import huggingface_hub  # noqa: PLC0415 - the Hub client, for a push only
 
     study_dir = Path(study_dir)
-    results = sorted((study_dir / EVAL_RESULTS_DIR).glob("*.yaml"))
+    results = sorted((study_dir / EVAL_RESULTS_DIR).glob(f"{Path(EVAL_RESULTS_FILE).stem}*.yaml"))  # ours only
     files = {f"{EVAL_RESULTS_DIR}/{p.name}": p for p in results}
     files[EPISODES_IN_REPO] = study_dir / "episodes.parquet"
     kept = f"nothing was lost: {', '.join(str(p) for p in files.values())} are complete; rerun with --push_to_hub"

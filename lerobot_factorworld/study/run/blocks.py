@@ -25,6 +25,7 @@ from .step import Step
 SEQUENTIAL = "sequential"  # an evaluation input (in the key, only with auto): the rule and the group's conditions
 GROUP = "sequential_group"  # run entry (not in the key): condition -> key of every step of the group
 BLOCKS_DIR = "blocks"
+EPISODES_RUN = "episodes_run"  # result entry: the episodes of it this run ran (a resumed group reads the rest back)
 
 
 def with_stop_rule(steps: list[Step], rule: StopRule) -> list[Step]:
@@ -78,6 +79,7 @@ def run_group(
         c: {"successes": [], "seeds": [], "stages": [], "lengths": []} for c in keys
     }
     sessions: dict[str, Session] = {}
+    ran = dict.fromkeys(keys, 0)  # episodes this run ran (not read back from a block): what its cost records
     shifted = [c for c in keys if c != TRAIN_SUITE]
     active = list(keys)
     for begin in range(start, start + rule.max_episodes, rule.block):
@@ -91,6 +93,7 @@ def run_group(
                         sessions[condition] = open_session(_step_of(by_condition, condition, folders))
                     session = sessions[condition]
                     successes = session.episodes(begin, rule.block)
+                ran[condition] += rule.block
                 seeds = list(range(begin, begin + rule.block))
                 block = {
                     "successes": successes,
@@ -116,6 +119,7 @@ def run_group(
                 sessions[condition] = open_session(step)
             result = sessions[condition].result(own["successes"], own["seeds"], own["stages"], own["lengths"])
         result[SEQUENTIAL] = stops[condition].to_dict()
+        result[EPISODES_RUN] = ran[condition]
         write(step, result)
 
 
