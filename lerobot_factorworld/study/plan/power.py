@@ -23,6 +23,11 @@ the report can tell from 0, for the plan's episode and seed counts.
 Only episode noise is counted: training seeds differ from each other too, which widens every summary's
 interval, so every number here is a lower bound on what the study needs (the two-task study measured
 standard errors of 0.01-0.09 on factor gaps over 3 seeds).
+
+With ``eval.episodes=auto`` none of those fixed-n intervals is reported (the stopping makes them invalid), so the
+lines are the rule's own (:func:`auto_power_lines`): the smallest gap its anytime-valid interval decides within the
+budget with no reversals (train-only successes spread evenly over the seeds), and the earliest look at which it
+can decide anything.
 """
 
 from __future__ import annotations
@@ -30,7 +35,10 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 
+import numpy as np
+
 from ..metrics import Z95, newcombe_paired
+from ..sequential import DECIDED, StopRule, apply_rule
 from .config import RADII_M, StudyConfig
 
 PLANNED_P = (0.5, 0.8, 0.95)  # planned success rates on the training environments (P_T), or P_min for pairs
@@ -99,8 +107,43 @@ def _fmt(value: float) -> str:
     return "   n/a" if math.isnan(value) else f"{value:6.3f}"
 
 
+def auto_decided_within(rule: StopRule, k: int, p_train: float) -> tuple[float, int]:
+    """(smallest gap, its episodes): the smallest gap that ``rule``, corrected over ``k`` conditions, decides within
+    its budget when no episode succeeds only when shifted (whole counts of train-only successes, spread evenly
+    over the seeds), and the episodes it takes to; (NaN, 0) if even P_F = 0 is not decided."""
+    n = rule.max_episodes
+    counts = np.arange(round(p_train * n) + 1)
+    train = np.zeros((len(counts), n))
+    for row, b in enumerate(counts):  # b train-only successes at evenly spaced seeds
+        train[row, np.floor(np.arange(b) * n / max(b, 1)).astype(int)] = 1.0
+    stops = apply_rule(train, np.zeros((len(counts), 1, n)), rule, k=k)
+    decided = np.flatnonzero(stops.reason[:, 0] == DECIDED)
+    if not len(decided):
+        return math.nan, 0
+    return counts[decided[0]] / n, int(stops.episodes[decided[0], 0])
+
+
+def auto_power_lines(cfg: StudyConfig, planned: Sequence[float] = PLANNED_P) -> list[str]:
+    """The ``--dry-run`` lines under ``eval.episodes=auto``: what its rule decides within the budget."""
+    rule, k = cfg.eval.stop_rule(), max(1, len(cfg.conditions()))
+    every = apply_rule(np.ones((1, rule.max_episodes)), np.zeros((1, 1, rule.max_episodes)), rule, k=k)
+    earliest = int(every.episodes[0, 0]) if every.reason[0, 0] == DECIDED else 0  # every pair favouring train
+    found = [auto_decided_within(rule, k, p) for p in planned]
+    header = "".join(f"  P={p:<5g}" for p in planned)
+    return [
+        f"  power under eval.episodes=auto ({rule.confidence:.0%} anytime-valid, Bonferroni over {k} condition(s), "
+        f"blocks of {rule.block}, budget {rule.max_episodes}; methods in study/plan/power.py): the earliest decision "
+        + (f"at {earliest} episodes, every pair favouring train" if earliest else "never, within the budget")
+        + "; the smallest gap decided within the budget, at planned P_T (no reversals):",
+        f"    {'':58s}{header}",
+        f"    {'gap, one condition (anytime-valid; no reversals)':58s}" + "".join(f"  {_fmt(g)}" for g, _ in found),
+    ]
+
+
 def power_lines(cfg: StudyConfig, planned: Sequence[float] = PLANNED_P) -> list[str]:
     """The ``--dry-run`` lines: smallest resolvable gap per cell and per summary, at each planned P_T."""
+    if cfg.eval.auto:  # no fixed-n interval is reported: what the rule itself decides
+        return auto_power_lines(cfg, planned)
     n, seeds, tasks, ns = cfg.eval.budget, len(cfg.seeds), len(cfg.tasks), len(cfg.n_train_envs)
     m_factor, m_n = tasks * ns * seeds, tasks * seeds
     header = "".join(f"  P={p:<5g}" for p in planned)
