@@ -140,3 +140,59 @@ def test_no_mean_gap_resolves_at_a_training_success_of_0():
     (a 0.0 here made the claims table report one episode per cell as enough to resolve any effect)."""
     assert math.isnan(power.mean_resolvable_gap(100, 0.0))
     assert math.isnan(power.cell_resolvable_gap(100, 0.0))
+
+
+def _decided_by_oracle(rule, k: int, p_train: float) -> tuple[float, int]:
+    """The smallest share of train-only successes, spread evenly over the seeds, that ``rule`` decides within its
+    budget, one candidate at a time through ``sequential.decide`` (not the vectorised search)."""
+    from lerobot_factorworld.study.sequential import decide
+
+    n = rule.max_episodes
+    for b in range(round(p_train * n) + 1):
+        at = {math.floor(i * n / b) for i in range(b)} if b else set()
+        train = [i in at for i in range(n)]
+        shifted = {f"c{j}": [False] * n for j in range(k)}  # k conditions to correct for, all alike
+        stop = decide(train, shifted, rule)["c0"]
+        if stop.reason == "decided":
+            return b / n, stop.episodes
+    return math.nan, 0
+
+
+@pytest.mark.parametrize(("budget", "k", "p_train"), [(10, 2, 0.8), (10, 2, 0.5), (40, 3, 0.5), (60, 7, 0.95)])
+def test_auto_power_is_the_first_evenly_spread_count_the_rule_decides(budget, k, p_train):
+    from lerobot_factorworld.study.sequential import StopRule
+
+    rule = StopRule(block=10, max_episodes=budget, tolerance=0.1, confidence=0.95)
+    found, expected = power.auto_decided_within(rule, k, p_train), _decided_by_oracle(rule, k, p_train)
+    assert found[1] == expected[1] and (found[0] == expected[0] or math.isnan(found[0]) and math.isnan(expected[0]))
+
+
+def test_dry_run_power_lines_under_auto_word_for_word():
+    cfg = StudyConfig(factors=["camera_pos", "light"], methods=[{"name": "bc", "policy": {"type": "bc"}}])
+    cfg.eval = EvalSettings(n_test_envs=10, episodes="auto", block=10, max_episodes=40, confidence=0.9)
+    # 2 conditions at 90%: every pair favouring train decides at the first look; 7 train-only successes in 40
+    # decide within the budget, at every planned P_T (each has at least 7 train successes to give)
+    lines = power.power_lines(cfg, planned=(0.25, 0.5, 0.9))
+    assert lines[:2] == [
+        "  power under eval.episodes=auto (90% anytime-valid, Bonferroni over 2 condition(s), blocks of 10, budget "
+        "40; methods in study/plan/power.py): the earliest decision at 10 episodes, every pair favouring train; the "
+        "smallest gap decided within the budget, at planned P_T (no reversals):",
+        "                                                                P=0.25   P=0.5    P=0.9  ",
+    ]
+    gaps = [power.auto_decided_within(cfg.eval.stop_rule(), 2, p)[0] for p in (0.25, 0.5, 0.9)]
+    assert lines[2:] == ["    gap, one condition (anytime-valid; no reversals)" + " " * 10 + "   0.175" * 3]
+    assert gaps == [0.175] * 3 and "Newcombe" not in "\n".join(lines)
+    # 7 conditions at 95% in one block of 10: nothing can be decided, not even every pair favouring train
+    cfg.factors = [
+        "camera_pos",
+        "light",
+        "table_pos",
+        "table_texture",
+        "floor_texture",
+        "object_texture",
+        "distractors",
+    ]
+    cfg.eval = EvalSettings(n_test_envs=10, episodes="auto", block=10, max_episodes=10)
+    lines = power.power_lines(cfg, planned=(0.5,))
+    assert "Bonferroni over 7 condition(s)" in lines[0] and "the earliest decision never, within the budget" in lines[0]
+    assert lines[2].endswith("     n/a")

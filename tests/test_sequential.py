@@ -209,23 +209,3 @@ def test_a_run_cut_short_leaves_conditions_running():
     rule = StopRule(block=10, max_episodes=100, tolerance=0.05)
     stops = decide([True, False] * 10, {"light": [True, False] * 10}, rule)
     assert running(stops) == ["light"] and stops["light"].episodes == 20
-
-
-def test_a_dry_run_under_auto_states_what_the_rule_decides_within_its_budget():
-    """--dry-run's power lines under auto are the rule's own: no fixed-n interval, the earliest decision, and the
-    smallest gap decided within the budget, which shrinks as the budget grows and is none where nothing can be."""
-    from lerobot_factorworld.study.plan.config import EvalSettings, StudyConfig
-    from lerobot_factorworld.study.plan.power import auto_decided_within, power_lines
-
-    rule = StopRule(block=10, max_episodes=10, tolerance=0.1, confidence=0.95)
-    assert math.isnan(auto_decided_within(rule, 2, 0.5)[0])  # five train-only successes in ten decide nothing
-    assert auto_decided_within(rule, 2, 0.8) == (0.8, 10)
-    longer = StopRule(block=10, max_episodes=100, tolerance=0.1, confidence=0.95)
-    gap, episodes = auto_decided_within(longer, 2, 0.8)
-    assert 0.05 < gap < 0.8 and episodes <= 100
-    assert auto_decided_within(longer, 7, 0.8)[0] > gap  # more conditions to correct for: a larger gap
-    evaluation = EvalSettings(n_test_envs=10, episodes="auto", block=10, max_episodes=100)
-    cfg = StudyConfig(methods=[{"name": "bc", "policy": {"type": "bc"}}], factors=["light", "camera_pos"])
-    cfg.eval = evaluation
-    text = "\n".join(power_lines(cfg))
-    assert "Newcombe" not in text and "the earliest decision at 10 episodes" in text and f"{gap:6.3f}" in text
