@@ -158,7 +158,10 @@ def _decided_by_oracle(rule, k: int, p_train: float) -> tuple[float, int]:
     return math.nan, 0
 
 
-@pytest.mark.parametrize(("budget", "k", "p_train"), [(10, 2, 0.8), (10, 2, 0.5), (40, 3, 0.5), (60, 7, 0.95)])
+@pytest.mark.parametrize(
+    ("budget", "k", "p_train"),
+    [(10, 2, 0.8), (10, 2, 0.7), (10, 2, 0.5), (40, 3, 0.5), (60, 7, 0.95)],  # 0.7: 8 of 10 would, 7 do not
+)
 def test_auto_power_is_the_first_evenly_spread_count_the_rule_decides(budget, k, p_train):
     from lerobot_factorworld.study.sequential import StopRule
 
@@ -196,3 +199,5 @@ def test_dry_run_power_lines_under_auto_word_for_word():
     lines = power.power_lines(cfg, planned=(0.5,))
     assert "Bonferroni over 7 condition(s)" in lines[0] and "the earliest decision never, within the budget" in lines[0]
     assert lines[2].endswith("     n/a")
+    cfg.factors = ["light"]  # one condition: nothing to correct for
+    assert "Bonferroni over 1 condition(s)" in power.power_lines(cfg, planned=(0.5,))[0]
