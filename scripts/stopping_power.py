@@ -55,6 +55,11 @@ F1_EPISODES = Path(__file__).resolve().parents[1] / "docs" / "results" / "f1_ord
 SIM_POINTS = 401  # candidate means of the simulations (bounds stepped outwards to them); shipped: confseq.GRID_POINTS
 
 
+def corrected_z(alpha: float, k: int) -> float:
+    """The normal quantile of a two-sided interval at ``alpha``, Bonferroni-corrected over ``k`` conditions."""
+    return NormalDist().inv_cdf(1 - alpha / (2 * k))
+
+
 def valid_test_floor(alpha: float, k: int) -> int:
     """The fewest paired episodes at which a valid test declaring either sign at ``alpha/(2k)`` can declare one."""
     return math.ceil(math.log2(2 * k / alpha))
@@ -112,7 +117,7 @@ def per_cell_bound(n: int, alpha: float) -> str:
     lengths = sorted({len(pairs) for by_factor in cells.values() for pairs in by_factor.values()})
     for by_factor in cells.values():
         k = len(by_factor)
-        z = NormalDist().inv_cdf(1 - alpha / (2 * k))
+        z = corrected_z(alpha, k)
         for pairs in by_factor.values():
             p10, p01 = rates(pairs)
             # declaring either sign is one test of the null, at alpha/k in all: the bound holds for it as it is
@@ -167,7 +172,7 @@ def compare(budget: int, args, gaps: np.ndarray, rng) -> list[str]:
     share = used.mean() / ((len(gaps) + 1) * budget)
     fixed = np.zeros(stops.episodes.shape, dtype=bool)
     corrected = np.zeros(stops.episodes.shape, dtype=bool)
-    z = NormalDist().inv_cdf(1 - (1 - args.confidence) / (2 * len(gaps)))
+    z = corrected_z(1 - args.confidence, len(gaps))
     for p in range(args.profiles):
         for c in range(len(gaps)):
             pair = train[p].astype(bool), shifted[p, c].astype(bool)

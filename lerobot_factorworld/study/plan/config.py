@@ -563,9 +563,8 @@ def write_run_config(path: str | Path, settings: dict[str, Any]) -> None:
     atomic_write_json(path, settings, indent=1, sort_keys=True, default=str)
 
 
-HUB_BENCHMARK = (
-    "lerobot-factorworld/factor-world"  # the benchmark dataset a profile's Hub results name (not on the Hub yet)
-)
+# the benchmark dataset a profile's Hub results name (not on the Hub yet)
+HUB_BENCHMARK = "lerobot-factorworld/factor-world"
 
 
 @dataclass

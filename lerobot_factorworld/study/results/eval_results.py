@@ -33,7 +33,8 @@ from ..sequential import INTERVAL_LABEL
 from .stopping import stop_rows
 
 EVAL_RESULTS_DIR = ".eval_results"
-EVAL_RESULTS_FILE = "factorworld.yaml"
+EVAL_RESULTS_STEM = "factorworld"  # our files in .eval_results/: factorworld.yaml and its variants factorworld_*.yaml
+EVAL_RESULTS_FILE = f"{EVAL_RESULTS_STEM}.yaml"
 BENCHMARK_CARD = "eval.yaml"
 EVALUATION_FRAMEWORK = "lerobot-factorworld"  # eval.yaml's framework key (the Hub's list must add it: module doc)
 EPISODES_IN_REPO = "factorworld/episodes.parquet"  # where a pull request puts the per-episode Parquet
@@ -87,9 +88,11 @@ def eval_entries(cfg: StudyConfig, rows: Sequence[dict]) -> list[dict]:
     return out
 
 
-def benchmark_card(cfg: StudyConfig) -> dict:
-    """The ``eval.yaml`` of a Factor World benchmark dataset: the task ids the entries name."""
+def benchmark_card(cfg: StudyConfig, named: Sequence[str] = ()) -> dict:
+    """The ``eval.yaml`` of a Factor World benchmark dataset: the task ids of the study's grid, then any other the
+    entries name (``named``)."""
     conditions = [TRAIN_SUITE, *cfg.conditions()]
+    ids = dict.fromkeys([*(task_id(task, condition) for task in cfg.tasks for condition in conditions), *named])
     return {
         "name": f"Factor World ({cfg.hub_benchmark})",
         "description": "Meta-World manipulation under factor shifts (lighting, textures, camera pose, table "
@@ -97,7 +100,7 @@ def benchmark_card(cfg: StudyConfig) -> dict:
         "with train the training environments; its value is the success rate in percent over paired episode "
         "seeds, evaluated by lerobot_factorworld's `factorworld profile`.",
         "evaluation_framework": EVALUATION_FRAMEWORK,
-        "tasks": [{"id": task_id(task, condition)} for task in cfg.tasks for condition in conditions],
+        "tasks": [{"id": i} for i in ids],
     }
 
 
@@ -183,7 +186,7 @@ def eval_files(cfg: StudyConfig, rows: Sequence[dict]) -> dict[str, list[dict]]:
         variant = [f"n{row['n_train_envs']}"] if len(n_values[row["method"]]) > 1 else []
         if row["widths"] != "default":
             variant.append(row["widths"].replace("=", "-").replace(",", "_"))
-        name = "_".join([Path(EVAL_RESULTS_FILE).stem, *variant])
+        name = "_".join([EVAL_RESULTS_STEM, *variant])
         files.setdefault(f"{folder}/{name}.yaml", []).append(entry)
     return files
 
@@ -198,13 +201,7 @@ def write_eval_results(cfg: StudyConfig, rows: Sequence[dict], out_dir: Path) ->
     Hub's documented fields first (a departure is a bug here, never the user's); their paths, the card last.
     Files of an earlier run that these results no longer hold are removed: the folder is these results."""
     files = eval_files(cfg, rows)
-    card = benchmark_card(cfg)
-    declared = [t["id"] for t in card["tasks"]]
-    card["tasks"] += [
-        {"id": t}
-        for t in dict.fromkeys(e["dataset"]["task_id"] for f in files.values() for e in f)
-        if t not in declared
-    ]
+    card = benchmark_card(cfg, [e["dataset"]["task_id"] for entries in files.values() for e in entries])
     problems = card_problems(card)
     for name, entries in files.items():
         problems += [f"{name}: {p}" for p in entry_problems(entries, [t["id"] for t in card["tasks"]])]
@@ -216,8 +213,7 @@ def write_eval_results(cfg: StudyConfig, rows: Sequence[dict], out_dir: Path) ->
     for name, entries in files.items():
         (out_dir / name).parent.mkdir(parents=True, exist_ok=True)
         written.append(atomic_write_text(out_dir / name, yaml.safe_dump(entries, **dump)))
-    stem = Path(EVAL_RESULTS_FILE).stem
-    for old in (out_dir / EVAL_RESULTS_DIR).rglob(f"{stem}*.yaml"):  # ours only: a user's own files stay
+    for old in (out_dir / EVAL_RESULTS_DIR).rglob(f"{EVAL_RESULTS_STEM}*.yaml"):  # ours only: a user's own files stay
         if old not in written:
             old.unlink()
             if old.parent != out_dir / EVAL_RESULTS_DIR and not any(old.parent.iterdir()):
@@ -232,7 +228,7 @@ def open_model_pr(study_dir: str | Path, model_repo_id: str) -> tuple[bool, str]
     import huggingface_hub  # noqa: PLC0415 - the Hub client, for a push only
 
     study_dir = Path(study_dir)
-    results = sorted((study_dir / EVAL_RESULTS_DIR).glob(f"{Path(EVAL_RESULTS_FILE).stem}*.yaml"))  # ours only
+    results = sorted((study_dir / EVAL_RESULTS_DIR).glob(f"{EVAL_RESULTS_STEM}*.yaml"))  # ours only
     files = {f"{EVAL_RESULTS_DIR}/{p.name}": p for p in results}
     files[EPISODES_IN_REPO] = study_dir / "episodes.parquet"
     kept = f"nothing was lost: {', '.join(str(p) for p in files.values())} are complete; rerun with --push_to_hub"

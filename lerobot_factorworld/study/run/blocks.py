@@ -58,13 +58,7 @@ OpenSession = Callable[[Step], Session]
 Timed = Callable[[str], contextlib.AbstractContextManager]
 
 
-def _untimed(condition: str) -> contextlib.AbstractContextManager:
-    return contextlib.nullcontext()
-
-
-def run_group(
-    steps: list[Step], study_dir: Path, open_session: OpenSession, write: Callable, timed: Timed = _untimed
-) -> None:
+def run_group(steps: list[Step], study_dir: Path, open_session: OpenSession, write: Callable, timed: Timed) -> None:
     """Run the group of ``steps`` (some of it may be finished already: it is then reread, never rerun) and write
     each unfinished step's result with ``write(step, result)``; ``open_session(step)`` prepares a condition.
     ``timed(condition)`` encloses all of one condition's own work (preparing it, its episodes, its result), so
