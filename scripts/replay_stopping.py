@@ -19,6 +19,7 @@ import argparse
 from collections import Counter
 from pathlib import Path
 from statistics import NormalDist
+from typing import NamedTuple
 
 import pyarrow.parquet as pq
 
@@ -52,7 +53,14 @@ def fixed_decision(train: list[bool], shifted: list[bool], conditions: int = 1) 
     return "+" if low > 0 else "-" if high < 0 else "none"
 
 
-Cell = tuple[tuple, int, int, Counter, Counter]  # (identity, episodes used, committed, agreement, corrected agreement)
+class Cell(NamedTuple):
+    """One replayed cell: its identity (key and outcomes: a cell two studies share is one), its episodes."""
+
+    identity: tuple
+    used: int  # episodes the rule would run
+    committed: int
+    agreement: Counter  # (rule, fixed-n uncorrected) -> conditions
+    corrected: Counter  # (rule, fixed-n corrected) -> conditions
 
 
 def replay(study: str, block: int, tolerance: float, confidence: float) -> tuple[list[str], list[Cell]]:
@@ -89,7 +97,7 @@ def replay(study: str, block: int, tolerance: float, confidence: float) -> tuple
         lines.append(f"  {label}: {cell_used}/{n * (len(shifted) + 1)} episodes; train {stops['train'].episodes}; "
                      + "; ".join(parts))  # fmt: skip
         identity = (key, tuple(t), tuple((c, tuple(ok for _, ok in e)) for c, e in sorted(shifted.items())))
-        replayed.append((identity, cell_used, n * (len(shifted) + 1), agreement, corrected))
+        replayed.append(Cell(identity, cell_used, n * (len(shifted) + 1), agreement, corrected))
     return lines, replayed
 
 
@@ -109,14 +117,14 @@ def main() -> None:
     unique: dict[tuple, Cell] = {}
     for study in args.studies:
         lines, replayed = replay(study, args.block, args.tolerance, args.confidence)
-        used, committed = sum(c[1] for c in replayed), sum(c[2] for c in replayed)
+        used, committed = sum(c.used for c in replayed), sum(c.committed for c in replayed)
         print(f"\n{study}: " + (f"{used}/{committed} episodes ({used / committed:.1%})" if committed else "no cells"))
         print("\n".join(lines))
         if committed:
             print("  " + _agreement_lines(replayed))
-        unique.update({cell[0]: cell for cell in replayed})
+        unique.update({cell.identity: cell for cell in replayed})
     cells = list(unique.values())
-    used, committed = sum(c[1] for c in cells), sum(c[2] for c in cells)
+    used, committed = sum(c.used for c in cells), sum(c.committed for c in cells)
     if not committed:
         print("\nall: no cell to replay")
         return
@@ -128,8 +136,8 @@ def main() -> None:
 
 def _agreement_lines(cells: list[Cell]) -> str:
     return "; ".join(
-        f"against fixed-n {name}: {_agreement_line(sum((c[index] for c in cells), Counter()))}"
-        for name, index in (("uncorrected", 3), ("corrected", 4))
+        f"against fixed-n {name}: {_agreement_line(sum((getattr(c, field) for c in cells), Counter()))}"
+        for name, field in (("uncorrected", "agreement"), ("corrected", "corrected"))
     )
 
 

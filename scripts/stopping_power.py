@@ -36,11 +36,10 @@ from __future__ import annotations
 
 import argparse
 import math
-from pathlib import Path
 from statistics import NormalDist
 
 import numpy as np
-import pyarrow.parquet as pq
+from replay_stopping import cells as committed_cells  # the replay's reading of committed episodes (scripts/)
 from tqdm import tqdm
 
 from lerobot_factorworld.study.confseq import candidate_grid
@@ -50,8 +49,7 @@ from lerobot_factorworld.study.sequential import DECIDED, StopRule, apply_rule
 F1_FACTORS = ("table_pos", "table_texture", "camera_pos", "object_texture", "floor_texture", "light", "distractors")
 F1_GAPS = (0.437, 0.423, 0.117, 0.090, 0.077, 0.053, 0.023)  # bc's mean gaps over F1's 15 cells
 F1_P_TRAIN = 0.917
-CELL = ("method", "task", "n_train_envs", "seed", "widths")  # a cell of F1's grid, as the replay has it
-F1_EPISODES = Path(__file__).resolve().parents[1] / "docs" / "results" / "f1_ordering" / "episodes.parquet"
+F1_STUDY = "f1_ordering"  # its committed episodes: docs/results/f1_ordering/episodes.parquet
 SIM_POINTS = 401  # candidate means of the simulations (bounds stepped outwards to them); shipped: confseq.GRID_POINTS
 
 
@@ -83,16 +81,13 @@ def discordance(p_train: float, gap: float, copula: float) -> tuple[float, float
 
 
 def committed_pairs(method: str | None = None) -> dict[tuple, dict[str, list[tuple[bool, bool]]]]:
-    """F1's committed paired outcomes: cell (``CELL``) -> factor -> [(train, shift)] in episode-seed order."""
-    columns = [*CELL, "condition", "episode_seed", "success"]
-    rows = [r for r in pq.read_table(F1_EPISODES, columns=columns).to_pylist() if method in (None, r["method"])]
-    outcome = {(*(r[c] for c in CELL), r["condition"], r["episode_seed"]): r["success"] for r in rows}
-    cells: dict[tuple, dict[str, list[tuple[bool, bool]]]] = {}
-    for (*cell, condition, episode), ok in sorted(outcome.items()):
-        if condition != "train":
-            pair = (outcome[(*cell, "train", episode)], ok)
-            cells.setdefault(tuple(cell), {}).setdefault(condition, []).append(pair)
-    return cells
+    """F1's committed paired outcomes, as the replay reads them: cell -> factor -> [(train, shift)] in seed order."""
+    pairs: dict[tuple, dict[str, list[tuple[bool, bool]]]] = {}
+    for cell, conditions in committed_cells(F1_STUDY).items():
+        if method in (None, cell[0]) and "train" in conditions:
+            train = dict(conditions["train"])
+            pairs[cell] = {c: [(train[seed], ok) for seed, ok in e] for c, e in conditions.items() if c != "train"}
+    return pairs
 
 
 def rates(pairs: list[tuple[bool, bool]]) -> tuple[float, float]:

@@ -39,7 +39,8 @@ def test_a_committed_output_is_what_its_commands_print(output):
         assert proc.stdout.strip() == committed, f"{' '.join(args)} prints something else than {output} holds"
 
 
-def test_the_floor_and_the_power_bound_no_valid_test_can_beat():
+def test_the_floor_and_the_power_bound_no_valid_test_can_beat(monkeypatch):
+    monkeypatch.syspath_prepend(str(ROOT / "scripts"))  # as `python scripts/...` has it: the replay beside it
     spec = importlib.util.spec_from_file_location("stopping_power", ROOT / "scripts" / "stopping_power.py")
     script = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(script)
