@@ -14,6 +14,7 @@ from lerobot_factorworld.core.settings import parse_config
 from lerobot_factorworld.study.plan.command import StudyCommand
 from lerobot_factorworld.study.plan.cost import describe, step_cost
 from lerobot_factorworld.study.plan.grid import CURVE_EPOCHS, make_plan
+from lerobot_factorworld.study.results.curve import curve_rows
 from lerobot_factorworld.study.run.options import RunOptions
 
 
@@ -33,10 +34,13 @@ def test_a_continued_training_is_keyed_by_the_one_it_continues_and_costs_only_it
     assert short.key == plain.of_kind("train")[0].key  # the same key as 10 epochs trained by any study
     scratch = make_plan(_command(tmp_path, extends=(), name="scratch").grid()).of_kind("train")[0]
     assert "extends" not in scratch.inputs and scratch.key != long.key
-    # the curve's 5-epoch point is the 10-epoch training's (its key), 10 and 15 the continued one's
+    # the curve's 5- and 10-epoch points are the 10-epoch training's, with the keys a 10-epoch study gives them (10:
+    # its last checkpoint, evaluated once that training ends), 15 the continued one's
     by_epochs = {s.meta[CURVE_EPOCHS]: s for s in plan.curve_points()}
-    assert {e: s.deps[0] for e, s in by_epochs.items()} == {5: short.key, 10: long.key, 15: long.key}
+    assert {e: s.deps[0] for e, s in by_epochs.items()} == {5: short.key, 10: short.key, 15: long.key}
     assert by_epochs[5].key == plain.curve_points()[0].key
+    (plain_last,) = [s for s in plain.evaluations() if s.meta["condition"] == "train"]
+    assert by_epochs[10].key == plain_last.key and "checkpoint_epochs" not in by_epochs[10].inputs
     index = {s.key: s for s in plan.steps}
     model = {"train": {"fixed_s": 0.0, "sample_s": {"bc": 1.0}}}
     scratch_index = {s.key: s for s in make_plan(_command(tmp_path, extends=(), name="scratch").grid()).steps}
@@ -73,7 +77,7 @@ def test_ten_epochs_continued_to_twenty_give_the_checkpoint_files_of_twenty_from
     result = json.loads((long.folder(grown.grid().out_dir) / "result.json").read_text())
     # 51 frames in batches of 8: a pass is 7 steps; 10 epochs are 64 steps, so it continues from 63
     assert (result["steps"], result["resumed_from"], result["extends"]) == (128, 63, short.key)
-    assert result["curve"] == {"10": 64, "15": 96}  # its own points; 5 epochs is the shorter training's
+    assert result["curve"] == {"15": 96}  # its own points; 5 and 10 epochs are the shorter training's
     checkpoints = {
         step: long.folder(grown.grid().out_dir) / "train" / "checkpoints" / f"{step:06d}" for step in (64, 96, 128)
     }
@@ -89,3 +93,6 @@ def test_ten_epochs_continued_to_twenty_give_the_checkpoint_files_of_twenty_from
                 a = a.replace(str(tmp_path / "scratch").encode(), str(tmp_path / "grown").encode())
             if name.name != "train_config.json" or step != 32:
                 assert a == b, f"{name} of step {step} differs"
+    # the curve reads each point's gradient step from the training that saved it (10 epochs: the shorter one's last)
+    rows = curve_rows(grown.grid(), make_plan(grown.grid()), grown.grid().out_dir)
+    assert [(r["epochs"], r["steps"]) for r in rows] == [(5, 32), (10, 64), (15, 96), (20, 128)]

@@ -105,8 +105,7 @@ def _method_steps(
         chain = _train_chain(settings, method.policy, seed, collect, labels, extras, epochs_over)
         train = chain[-1]
         curve = [
-            _curve_step(cfg, epochs, _trained_past(chain, epochs), collect, labels)
-            for epochs in settings.curve_epochs()
+            _curve_step(cfg, epochs, _trained_at(chain, epochs), collect, labels) for epochs in settings.curve_epochs()
         ]
         evals = [_eval_step(cfg, c, train, collect, labels) for c in conditions]
         return [*extras, *chain, *_stopped(cfg, evals), *curve]
@@ -177,10 +176,11 @@ def _train_chain(
     return chain
 
 
-def _trained_past(chain: list[Step], epochs: float) -> Step:
-    """The training of ``chain`` that saves the learning curve's checkpoint at ``epochs``: the first whose budget is
-    past it (the earlier points are the shorter trainings' own, with their keys)."""
-    return next(s for s in chain if epochs < s.inputs["epochs"])
+def _trained_at(chain: list[Step], epochs: float) -> Step:
+    """The training of ``chain`` that saves the learning curve's checkpoint at ``epochs``: the first whose budget
+    reaches it, so a point at a link's end is that link's last checkpoint, evaluated as soon as the link ends (the
+    earlier points are the shorter trainings' own, with their keys)."""
+    return next(s for s in chain if epochs <= s.inputs["epochs"])
 
 
 def _train_step(
@@ -228,10 +228,14 @@ def _eval_step(cfg: StudyConfig, condition: str, train: Step, collect: Step, lab
 
 def _curve_step(cfg: StudyConfig, epochs: float, train: Step, collect: Step, labels: dict) -> Step:
     """P_T of the learning curve's checkpoint at ``epochs`` (nominal): the ``train`` condition's evaluation with
-    that checkpoint, a step of its own (the curve's last point is the grid's own ``train`` evaluation)."""
+    that checkpoint, a step of its own (the curve's last point is the grid's own ``train`` evaluation). At the end
+    of a shorter training of a chain (``train.extends``) it is that training's own ``train`` evaluation, the key a
+    study that trains only that budget gives its last point."""
     step = _eval_step(cfg, TRAIN_SUITE, train, collect, labels)
-    inputs = replace(_eval_inputs(cfg, TRAIN_SUITE, labels["task"]), checkpoint_epochs=epochs)
-    return Step("eval", inputs.to_dict(), step.deps, {**step.meta, CURVE_EPOCHS: epochs})
+    inputs = step.inputs
+    if epochs != train.inputs["epochs"]:  # a checkpoint before the training's last
+        inputs = replace(_eval_inputs(cfg, TRAIN_SUITE, labels["task"]), checkpoint_epochs=epochs).to_dict()
+    return Step("eval", inputs, step.deps, {**step.meta, CURVE_EPOCHS: epochs})
 
 
 def _given_eval_step(

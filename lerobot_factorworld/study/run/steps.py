@@ -498,8 +498,8 @@ def _run_train(step: Step, folder: Path, deps: list[Path]) -> dict[str, Any]:
     # what is left: process start and imports (subprocess), dataset and policy set-up, checkpoint saving
     timings.add("startup_save", time.perf_counter() - start - sum(logged.values()) - timings.seconds.get("imports", 0))
     result = {"checkpoint": str(out / CHECKPOINT), "steps": steps}
-    own = {epochs: at for epochs, at in curve.items() if inputs.extends is None or float(epochs) >= inputs.extends}
-    if own:  # an extension's earlier points are the prefix's (its evaluations depend on the prefix)
+    own = {epochs: at for epochs, at in curve.items() if inputs.extends is None or float(epochs) > inputs.extends}
+    if own:  # an extension's points up to the prefix's end are the prefix's (their evaluations depend on it)
         result["curve"] = own
     if start_step:  # trained from this saved step on: after a kill, or from the training it extends
         result["resumed_from"] = start_step
