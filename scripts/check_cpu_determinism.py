@@ -26,10 +26,8 @@ import argparse
 import hashlib
 import json
 import os
-import platform
 import subprocess
 import sys
-from pathlib import Path
 
 import _bench
 
@@ -96,21 +94,6 @@ def fingerprint() -> dict[str, str]:
     return {"weights": weights, "pixels": pixels.hexdigest()[:16], "physics": physics.hexdigest()[:16]}
 
 
-def cpu_line() -> str:
-    model, flags = platform.processor() or platform.machine(), set()
-    cpuinfo = Path("/proc/cpuinfo")
-    if cpuinfo.is_file():
-        for line in cpuinfo.read_text().splitlines():
-            key, _, value = line.partition(":")
-            if key.strip() == "model name":
-                model = value.strip()
-            elif key.strip() == "flags":
-                flags = set(value.split())
-                break
-    isa = [name for name in ("avx512f", "avx512_bf16", "amx_tile", "avx2", "fma") if name in flags]
-    return f"{model}; {', '.join(isa) or 'no AVX2'}; {os.cpu_count()} CPUs"
-
-
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--quick", action="store_true", help="two runs: the machine as it is and oneDNN at SSE4.1")
@@ -119,7 +102,10 @@ def main() -> None:
     if args.child:
         print(json.dumps(fingerprint()))
         return
-    print(f"CPU: {cpu_line()}")
+    _bench.add_repo_to_path()
+    from lerobot_factorworld.core import machine  # noqa: PLC0415 - the checkout's package, once on the path
+
+    print(f"CPU: {machine.describe(machine.current())}")
     rows = {}
     caps = [CAPS[0], CAPS[2]] if args.quick else CAPS
     for label, env in caps:

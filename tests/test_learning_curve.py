@@ -13,12 +13,15 @@ import pytest
 from toy_study import write_toy_study
 
 from lerobot_factorworld.core.settings import parse_config
+from lerobot_factorworld.envs.stages import stage_names
 from lerobot_factorworld.study.metrics import newcombe_independent
 from lerobot_factorworld.study.plan.command import StudyCommand
 from lerobot_factorworld.study.plan.config import TrainSettings
 from lerobot_factorworld.study.plan.grid import CURVE_EPOCHS, make_plan
 from lerobot_factorworld.study.report.curve_report import curve_section
-from lerobot_factorworld.study.results.curve import CURVE_FILE, pooled_curve, read_curve
+from lerobot_factorworld.study.results.curve import CURVE_COLUMNS, CURVE_FILE, pooled_curve, read_curve
+from lerobot_factorworld.study.results.merge import merge_curve_rows
+from lerobot_factorworld.study.results.rows import parse_stage_counts
 from lerobot_factorworld.study.run.inputs import EvalInputs, TrainInputs
 from lerobot_factorworld.study.run.steps import curve_saves
 
@@ -116,6 +119,43 @@ def test_the_curve_section_gives_each_step_along_a_curve_and_each_method_against
     assert "### Differences" not in "\n".join(curve_section(rows[:1], plotted=False, methods=["a"]))
 
 
+def test_the_curve_shows_where_each_checkpoint_s_episodes_end_and_reads_older_files_without_it(tmp_path):
+    """Each checkpoint's episodes by furthest stage, pooled over cells: a point one of whose cells has no stage
+    counts gets no row; a curve.csv written before the column existed is read (stages empty) and merged with a
+    newer one holding the same point, which keeps its counts."""
+    staged = [
+        ("a", 10, "none:2;reached:1;succeeded:1"),
+        ("a", 10, "none:2;reached:1;succeeded:1"),
+        ("a", 20, "none:0;reached:1;succeeded:3"),
+        ("b", 10, "none:4;reached:0;succeeded:0"),
+        ("b", 10, ""),
+    ]
+    rows = [{"method": m, "task": "t", "epochs": e, "successes": int(st[-1] if st else 0), "episodes": 4, "stages": st}
+            for m, e, st in staged]  # fmt: skip
+    text = "\n".join(curve_section(rows, plotted=False, methods=["a", "b"]))
+    assert "### Where the curve's episodes end" in text
+    assert "| method | task | epochs | episodes | none | reached | succeeded |" in text
+    assert "| a | t | 10 | 8 | 0.50 | 0.25 | 0.25 |" in text and "| a | t | 20 | 4 | 0.00 | 0.25 | 0.75 |" in text
+    assert "| b | t |" not in text.split("### Where the curve's episodes end")[1]
+    assert "### Where" not in "\n".join(curve_section([{**r, "stages": ""} for r in rows], False, ["a", "b"]))
+
+    cmd = _command(tmp_path)
+    plan = make_plan(cmd.grid())
+    point = plan.curve_points()[0]
+    new = {"study": "s", "method": "bc", "policy": "bc", "task": "handle-press", "n_train_envs": 1, "seed": 0,
+           "widths": "default", "epochs": 1, "steps": 7, "episodes": 2, "successes": 1, "success_rate": 0.5,
+           "ci_low": 0.1, "ci_high": 0.9, "step": point.key, "stages": "none:1;reached:0;succeeded:1"}  # fmt: skip
+    old_file = tmp_path / "old.csv"
+    old_columns = [c for c in CURVE_COLUMNS if c != "stages"]
+    old_file.write_text(",".join(old_columns) + "\n" + ",".join(str(new[c]) for c in old_columns) + "\n")
+    (old,) = read_curve(old_file)
+    assert old["stages"] == "" and "### Where" not in "\n".join(curve_section([old], False, ["bc"]))
+    merged = merge_curve_rows([[old], [new]], plan, ["old", "new"])
+    assert [r["stages"] for r in merged] == [new["stages"]]
+    with pytest.raises(ValueError, match="differs between old and new in successes"):
+        merge_curve_rows([[old], [{**new, "successes": 2}]], plan, ["old", "new"])
+
+
 @pytest.mark.slow
 def test_a_study_with_a_curve_evaluates_each_checkpoint_and_reports_it(tmp_path):
     from lerobot_factorworld.study.report.write import regenerate_report
@@ -127,6 +167,10 @@ def test_a_study_with_a_curve_evaluates_each_checkpoint_and_reports_it(tmp_path)
     assert outcome.ran == {"collect": 1, "train": 1, "eval": 3}
     rows = read_curve(tmp_path / "out" / CURVE_FILE)
     assert [r["epochs"] for r in rows] == [1, 2, 3] and all(r["episodes"] == 2 for r in rows)
+    for row in rows:  # each checkpoint's episodes by furthest stage, the task's stages in order
+        counts = parse_stage_counts(row["stages"])
+        assert list(counts) == list(stage_names("handle-press")) and sum(counts.values()) == 2
+        assert counts["succeeded"] == row["successes"]
     steps = [r["steps"] for r in rows]
     assert steps[1] == 2 * steps[0] and steps[2] > steps[1]
     checkpoints = sorted(p.name for p in (tmp_path / "out" / "steps" / "train").glob("*/train/checkpoints/*"))
@@ -150,6 +194,14 @@ def test_a_study_with_a_curve_evaluates_each_checkpoint_and_reports_it(tmp_path)
         return text[start : text.index(f"(`{CURVE_FILE}`).*", start)]
 
     assert section(again) == section(report)
+
+    def stage_rows(text: str) -> list[str]:  # the stage table's rows: one per checkpoint
+        lines = text[text.index("### Where the curve's episodes end") :].splitlines()
+        header = lines.index("| method | task | epochs | episodes | none | reached | moved | succeeded |")
+        return lines[header + 2 : lines.index("", header)]
+
+    assert [row.split(" | ")[2] for row in stage_rows(report)] == ["1", "2", "3"]
+    assert stage_rows(again) == stage_rows(report)
 
 
 TWO_METHODS = """

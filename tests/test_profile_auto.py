@@ -9,6 +9,8 @@ import time
 
 import pytest
 
+from lerobot_factorworld.core import machine
+
 PROFILE = ["--task=pick-place", "--n_train_envs=1", "--train_factors=[light]", "--factors=[light,table_texture]"]
 AUTO = ["--eval.n_test_envs=2", "--eval.episodes=auto", "--eval.block=2", "--eval.max_episodes=8",
         "--eval.max_episode_steps=4"]  # fmt: skip
@@ -80,6 +82,7 @@ def test_an_auto_profile_stops_each_condition_keeps_every_episode_and_says_why(f
         )
         assert result["timings"]["env_step"] + result["timings"]["policy"] < result["timings"]["total"]
         assert result["episodes_run"] == len(result["successes"]) == 6
+        assert result["machine"] == machine.current()  # the CPU that ran it, as every step records
     assert sum(r["seconds"] for r in results.values()) <= wall  # the group's time split, never counted twice
     from lerobot_factorworld.study.plan.cost import fit_constants
 

@@ -6,6 +6,7 @@ folders kept). Fast: the steps run in this process with fake runners (as in test
 from __future__ import annotations
 
 import json
+import os
 import shutil
 import subprocess
 from dataclasses import replace
@@ -13,7 +14,7 @@ from pathlib import Path
 
 import pytest
 
-from lerobot_factorworld.core import provenance
+from lerobot_factorworld.core import machine, provenance
 from lerobot_factorworld.core.provenance import Provenance, git_state, source_hash
 from lerobot_factorworld.core.settings import parse_config
 from lerobot_factorworld.study import runner
@@ -172,7 +173,9 @@ def test_a_step_records_its_provenance_and_its_key_does_not_hold_it(tmp_path, ra
     stored = json.loads((collect.folder(cfg.out_dir) / steps.RESULT_FILE).read_text())
     assert stored[steps.PROVENANCE] == provenance.current().to_dict()
     assert steps.provenance_of(stored) == provenance.current()
-    assert "provenance" not in (collect.folder(cfg.out_dir) / steps.INPUTS_FILE).read_text()
+    assert stored[steps.MACHINE] == machine.current() and stored[steps.MACHINE]["cpus"] == os.cpu_count()
+    inputs_text = (collect.folder(cfg.out_dir) / steps.INPUTS_FILE).read_text()
+    assert "provenance" not in inputs_text and steps.MACHINE not in inputs_text
     monkeypatch.setattr(provenance, "current", lambda: Provenance(OTHER, False, OTHER_HASH))
     assert [s.key for s in make_plan(cfg).steps] == [s.key for s in plan.steps]  # other code: the same keys
     train = plan.of_kind("train")[0]
@@ -401,3 +404,33 @@ def test_strict_and_rerun_stale_together_are_refused(tmp_path):
 
     with pytest.raises(SettingError, match="strict=true refuses .* rerun_stale=true redoes them: set one"):
         _study(tmp_path, "--strict=true", "--rerun_stale=true")
+
+
+CPUINFO = """processor\t: 0
+model name\t: Intel(R) Xeon(R) Processor
+flags\t\t: fpu sse4_1 avx2 fma avx512f avx512_bf16 amx_tile amx_bf16
+
+processor\t: 1
+model name\t: Intel(R) Xeon(R) Processor
+flags\t\t: fpu sse4_1 avx2 fma avx512f avx512_bf16 amx_tile amx_bf16
+"""
+
+
+def test_the_machine_is_named_by_its_cpu_and_the_extensions_that_choose_torch_s_kernels(monkeypatch):
+    assert machine.cpu_of(CPUINFO) == (
+        "Intel(R) Xeon(R) Processor",
+        ["amx_bf16", "amx_tile", "avx512_bf16", "avx512f", "avx2", "fma"],
+    )
+    assert machine.cpu_of("processor : 0\nflags : fpu sse4_1\n") == ("", [])  # no model name, no AVX2
+    here = {"cpu": "Xeon", "isa": ["avx2", "fma"], "isa_cap": None, "cpus": 2}
+    assert machine.describe(here) == "Xeon; avx2, fma; 2 CPUs"
+    assert (
+        machine.describe({**here, "isa": [], "isa_cap": "SSE41"}) == "Xeon; no AVX2; 2 CPUs; ONEDNN_MAX_CPU_ISA=SSE41"
+    )
+    monkeypatch.setenv(machine.ISA_CAP_ENV, "AVX2")
+    machine.current.cache_clear()
+    try:
+        assert machine.current()["isa_cap"] == "AVX2" and machine.current()["cpus"] == os.cpu_count()
+    finally:
+        monkeypatch.delenv(machine.ISA_CAP_ENV)
+        machine.current.cache_clear()

@@ -53,7 +53,36 @@ def curve_section(rows: Sequence[dict[str, Any]], plotted: bool, methods: Sequen
     lines += ["", "Each cell: P_T [95% interval] (episodes)."]
     if plotted:
         lines += ["", f"![learning curve]({CURVE_PLOT})", "", f"*{CURVE_CAPTION}*"]
-    return [*lines, *_differences(by_line, epochs, methods), ""]
+    return [*lines, *_differences(by_line, epochs, methods), *_stages(by_line), ""]
+
+
+def _stages(by_line: dict[tuple[str, str], dict[float, dict]]) -> list[str]:
+    """Where each checkpoint's episodes end (the share by furthest stage, as *Where episodes fail* gives the
+    grid's), so a curve shows which stage training moves episodes past and where they still stop: one table
+    per list of stage names; nothing for a curve.csv without stage counts."""
+    tables: dict[tuple[str, ...], list[str]] = {}
+    for (method, task), points in by_line.items():
+        for epochs, point in sorted(points.items()):
+            if not point["stages"]:
+                continue
+            total = sum(point["stages"].values())
+            shares = " | ".join(f"{count / total:.2f}" for count in point["stages"].values())
+            row = f"| {method} | {task} | {epochs:g} | {total} | {shares} |"
+            tables.setdefault(tuple(point["stages"]), []).append(row)
+    if not tables:
+        return []
+    lines = [
+        "",
+        "### Where the curve's episodes end",
+        "",
+        "The share of each checkpoint's episodes by the furthest stage it reached, pooled like the table above "
+        "(the stages of *Where episodes fail*): a checkpoint that gains success shows which stage it moved its "
+        "episodes past, and one that levels off shows where its episodes still stop.",
+    ]
+    for names, rows in tables.items():
+        lines += ["", "| method | task | epochs | episodes | " + " | ".join(names) + " |"]
+        lines += ["|---|---|---|---|" + "---|" * len(names), *rows]
+    return lines
 
 
 def _differences(

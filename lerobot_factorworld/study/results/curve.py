@@ -6,7 +6,7 @@ seeds per checkpoint (the figure's and the report table's points)."""
 from __future__ import annotations
 
 import math
-from collections import defaultdict
+from collections import Counter, defaultdict
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
@@ -18,7 +18,7 @@ from ..plan.config import StudyConfig
 from ..plan.grid import CURVE_EPOCHS, Plan
 from ..run.inputs import whole_epochs
 from ..run.steps import Step, is_done, read_result, step_folder
-from .rows import Evaluation, csv_text, policy_of
+from .rows import Evaluation, csv_text, parse_stage_counts, policy_of, stage_counts_text
 
 CURVE_FILE = "curve.csv"
 CURVE_COLUMNS = (
@@ -37,7 +37,9 @@ CURVE_COLUMNS = (
     "ci_low",
     "ci_high",
     "step",  # key of the eval step
+    "stages",  # episodes per furthest stage, as results.csv's column: where the checkpoint's failures end
 )
+OPTIONAL_CURVE_COLUMNS = ("stages",)  # added later: older curve.csv files lack it
 CELL = ("method", "task", "n_train_envs", "seed", "widths")
 
 
@@ -85,11 +87,15 @@ def _row(cfg: StudyConfig, evaluation: Evaluation, epochs: float, saved_at: int)
         "ci_low": low,
         "ci_high": high,
         "step": evaluation.step.key,
+        "stages": stage_counts_text(meta["task"], evaluation.result.get("stages")),
     }
 
 
 def write_curve(rows: Sequence[dict[str, Any]], path: Path) -> Path:
-    atomic_write_text(path, csv_text(rows, CURVE_COLUMNS))
+    """``curve.csv``; a later column no row holds is left out, so points read from an older file are written back
+    as that file's bytes."""
+    empty = {c for c in OPTIONAL_CURVE_COLUMNS if not any(row.get(c) for row in rows)}
+    atomic_write_text(path, csv_text(rows, [c for c in CURVE_COLUMNS if c not in empty]))
     return path
 
 
@@ -97,23 +103,29 @@ def read_curve(path: str | Path) -> list[dict[str, Any]]:
     """``curve.csv``'s rows with their numbers as numbers (epochs as :func:`curve_rows` holds them, whole ones as
     integers, so that written again they give the same bytes)."""
     integers = ("n_train_envs", "seed", "steps", "episodes", "successes")
-    rows = read_table(path, CURVE_COLUMNS, integers, ("epochs", "success_rate", "ci_low", "ci_high"))
-    return [{**row, "epochs": whole_epochs(row["epochs"])} for row in rows]
+    required = [c for c in CURVE_COLUMNS if c not in OPTIONAL_CURVE_COLUMNS]
+    rows = read_table(path, required, integers, ("epochs", "success_rate", "ci_low", "ci_high"))
+    return [{**dict.fromkeys(OPTIONAL_CURVE_COLUMNS, ""), **row, "epochs": whole_epochs(row["epochs"])} for row in rows]
 
 
 def pooled_curve(rows: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
     """Per (method, task, epochs): the episodes and successes summed over N, seeds and widths, with the Wilson
     95% interval of the pooled rate (episodes of one checkpoint are independent given it; seeds add variance
-    this interval does not hold, so it is a lower bound on the spread between seeds)."""
-    pooled: dict[tuple, list[int]] = defaultdict(lambda: [0, 0, 0])
+    this interval does not hold, so it is a lower bound on the spread between seeds), and the episodes per
+    furthest stage summed the same way (``{}`` where a row has no stage counts)."""
+    pooled: dict[tuple, list] = defaultdict(lambda: [0, 0, 0, Counter(), True])
     for row in rows:
         point = pooled[(row["method"], row["task"], float(row["epochs"]))]
         point[0] += row["successes"]
         point[1] += row["episodes"]
         point[2] += 1
+        stages = parse_stage_counts(row.get("stages", ""))
+        point[3].update(stages)
+        point[4] = point[4] and bool(stages)
     out = []
-    for (method, task, epochs), (k, n, cells) in sorted(pooled.items()):
+    for (method, task, epochs), (k, n, cells, stages, staged) in sorted(pooled.items()):
         low, high = wilson_interval(k, n)
         out.append({"method": method, "task": task, "epochs": epochs, "cells": cells, "successes": k,
-                    "episodes": n, "success_rate": k / n if n else math.nan, "ci_low": low, "ci_high": high})  # fmt: skip
+                    "episodes": n, "success_rate": k / n if n else math.nan, "ci_low": low, "ci_high": high,
+                    "stages": dict(stages) if staged else {}})  # fmt: skip
     return out

@@ -19,7 +19,7 @@ from typing import Any
 
 from ..plan.grid import Plan
 from .curve import CELL as CURVE_CELL
-from .curve import CURVE_COLUMNS, CURVE_FILE, last_points, read_curve, write_curve
+from .curve import CURVE_COLUMNS, CURVE_FILE, OPTIONAL_CURVE_COLUMNS, last_points, read_curve, write_curve
 from .episodes import EPISODES_FILE, read_episodes, write_episodes
 from .rows import RESULT_COLUMNS, RESULTS_FILE, read_results, write_results
 
@@ -85,13 +85,18 @@ def merge_curve_rows(
                 )
             seen = by_step.get(row["step"])
             point = {c: row[c] for c in CURVE_COLUMNS}
-            if seen is not None and not _same(seen[0], point):
-                differ = [c for c in CURVE_COLUMNS if not _same({c: seen[0][c]}, {c: point[c]})]
+            if seen is None:
+                by_step[row["step"]] = (point, name)
+                continue
+            # a column an older curve.csv lacks (empty) is unknown there, not different
+            known = [c for c in CURVE_COLUMNS if c not in OPTIONAL_CURVE_COLUMNS or "" not in (seen[0][c], point[c])]
+            differ = [c for c in known if not _same({c: seen[0][c]}, {c: point[c]})]
+            if differ:
                 raise ValueError(
                     f"the learning-curve point {row['step']} differs between {seen[1]} and {name} in "
                     f"{', '.join(differ)}"
                 )
-            by_step.setdefault(row["step"], (point, name))
+            seen[0].update({c: point[c] for c in OPTIONAL_CURVE_COLUMNS if point[c] != ""})
     rows = [row for row, _ in by_step.values()]
     return sorted(rows, key=lambda r: ([str(r[c]) for c in CURVE_CELL], r["epochs"]))
 

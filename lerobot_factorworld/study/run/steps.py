@@ -34,7 +34,7 @@ from pathlib import Path
 from typing import Any
 
 from ... import __version__  # the package root registers the env and policy types (in a fresh worker too)
-from ...core import provenance
+from ...core import machine, provenance
 from ...core.io import atomic_write_text
 from ...core.memory import keep_freed_memory
 from ...core.timing import Timings
@@ -72,6 +72,7 @@ RESULT_PATHS = ("root", "checkpoint")  # result entries that name files: stored 
 DISTRIBUTION = "lerobot_env_factorworld"
 TIMINGS = "timings"  # result entry: where the step's time went (seconds); never in a key or in results.csv
 PROVENANCE = "provenance"  # result entry: the code that made the step (Provenance.to_dict()); never in a key
+MACHINE = "machine"  # result entry: the CPU that made the step (core/machine.py); never in a key
 # How steps run (never what they compute: the same step keys, results, checkpoints and datasets either way):
 # ``per_step`` runs every step on its own (``lerobot-train`` as a subprocess, each evaluation loading its
 # policy); ``grouped`` trains in the worker process and evaluates all conditions of a checkpoint in one task.
@@ -183,6 +184,7 @@ def run_step(step_data: dict[str, Any], study_dir: str, execution: str = "per_st
     timings.add("total", time.perf_counter() - start)
     result[TIMINGS] = timings.as_dict()
     result[PROVENANCE] = made_by.to_dict()
+    result[MACHINE] = machine.current()
     stored = _portable(result, Path(study_dir))
     atomic_write_text(folder / RESULT_FILE, json.dumps(stored, indent=1, sort_keys=True))
     return result
@@ -288,6 +290,7 @@ def _run_group(steps: list[Step], study_dir: Path, execution: str) -> None:
         result["seconds"] = round(wall[condition], 2)
         result[TIMINGS] = {**own[condition].as_dict(), "total": wall[condition]}
         result[PROVENANCE] = made_by.to_dict()
+        result[MACHINE] = machine.current()
         stored = _portable(result, study_dir)
         atomic_write_text(step.folder(study_dir) / RESULT_FILE, json.dumps(stored, indent=1, sort_keys=True))
 

@@ -1,0 +1,54 @@
+"""Which CPU made a result: its model, the instruction-set extensions that choose torch's CPU kernels, and a cap on
+them set in the environment.
+
+The same code and key make byte-identical steps on one machine, but a training on another CPU may differ in its
+last bits: oneDNN picks its kernels by the instruction set (AVX-512, AVX2, SSE4.1 sum in different orders; bf16
+kernels differ again with AVX512-BF16 and AMX), and ``ONEDNN_MAX_CPU_ISA`` caps that choice. A study step records
+:func:`current` in its ``result.json`` beside the code that made it (never in a key), so two runs that differ can
+be told apart by their machines (docs/study.md, "Across machines").
+"""
+
+from __future__ import annotations
+
+import functools
+import os
+import platform
+from pathlib import Path
+from typing import Any
+
+# The x86 extensions that change which oneDNN kernels run (fp32 and bf16), in the order of a description.
+KERNEL_ISA = ("amx_bf16", "amx_tile", "avx512_bf16", "avx512f", "avx2", "fma")
+ISA_CAP_ENV = "ONEDNN_MAX_CPU_ISA"  # oneDNN's cap on the instruction set its kernels use
+CPUINFO = Path("/proc/cpuinfo")
+
+
+def cpu_of(cpuinfo: str) -> tuple[str, list[str]]:
+    """(model name, the :data:`KERNEL_ISA` extensions it lists) of a ``/proc/cpuinfo`` text's first CPU."""
+    model, flags = "", set()
+    for line in cpuinfo.splitlines():
+        key, _, value = line.partition(":")
+        if key.strip() == "model name" and not model:
+            model = value.strip()
+        elif key.strip() == "flags":
+            flags = set(value.split())
+            break
+    return model, [name for name in KERNEL_ISA if name in flags]
+
+
+@functools.cache
+def current() -> dict[str, Any]:
+    """This machine: ``cpu`` (model), ``isa`` (its :data:`KERNEL_ISA` extensions; empty where the OS does not list
+    them), ``isa_cap`` (``ONEDNN_MAX_CPU_ISA``, or None) and ``cpus`` (logical CPUs). Read once per process."""
+    model, isa = cpu_of(CPUINFO.read_text()) if CPUINFO.is_file() else ("", [])
+    return {
+        "cpu": model or platform.processor() or platform.machine(),
+        "isa": isa,
+        "isa_cap": os.environ.get(ISA_CAP_ENV) or None,
+        "cpus": os.cpu_count(),
+    }
+
+
+def describe(machine: dict[str, Any]) -> str:
+    """``Intel(R) Xeon(R) Processor; amx_bf16, ..., fma; 2 CPUs`` (and the cap where one was set)."""
+    cap = f"; {ISA_CAP_ENV}={machine['isa_cap']}" if machine.get("isa_cap") else ""
+    return f"{machine['cpu']}; {', '.join(machine['isa']) or 'no AVX2'}; {machine['cpus']} CPUs{cap}"
