@@ -19,7 +19,7 @@ from lerobot_factorworld.study.plan.command import StudyCommand
 from lerobot_factorworld.study.plan.config import TrainSettings
 from lerobot_factorworld.study.plan.grid import CURVE_EPOCHS, make_plan
 from lerobot_factorworld.study.report.curve_report import curve_section
-from lerobot_factorworld.study.results.curve import CURVE_COLUMNS, CURVE_FILE, pooled_curve, read_curve
+from lerobot_factorworld.study.results.curve import CURVE_COLUMNS, CURVE_FILE, pooled_curve, read_curve, write_curve
 from lerobot_factorworld.study.results.merge import merge_curve_rows
 from lerobot_factorworld.study.results.rows import parse_stage_counts
 from lerobot_factorworld.study.run.inputs import EvalInputs, TrainInputs
@@ -130,13 +130,16 @@ def test_the_curve_shows_where_each_checkpoint_s_episodes_end_and_reads_older_fi
         ("b", 10, "none:4;reached:0;succeeded:0"),
         ("b", 10, ""),
     ]
-    rows = [{"method": m, "task": "t", "epochs": e, "successes": int(st[-1] if st else 0), "episodes": 4, "stages": st}
+    rows = [{"method": m, "task": "handle-press", "epochs": e, "successes": int(st[-1] if st else 0), "episodes": 4, "stages": st}
             for m, e, st in staged]  # fmt: skip
     text = "\n".join(curve_section(rows, plotted=False, methods=["a", "b"]))
     assert "### Where the curve's episodes end" in text
     assert "| method | task | epochs | episodes | none | reached | succeeded |" in text
-    assert "| a | t | 10 | 8 | 0.50 | 0.25 | 0.25 |" in text and "| a | t | 20 | 4 | 0.00 | 0.25 | 0.75 |" in text
-    assert "| b | t |" not in text.split("### Where the curve's episodes end")[1]
+    assert (
+        "| a | handle-press | 10 | 8 | 0.50 | 0.25 | 0.25 |" in text
+        and "| a | handle-press | 20 | 4 | 0.00 | 0.25 | 0.75 |" in text
+    )
+    assert "| b | handle-press |" not in text.split("### Where the curve's episodes end")[1]
     assert "### Where" not in "\n".join(curve_section([{**r, "stages": ""} for r in rows], False, ["a", "b"]))
 
     cmd = _command(tmp_path)
@@ -150,10 +153,38 @@ def test_the_curve_shows_where_each_checkpoint_s_episodes_end_and_reads_older_fi
     old_file.write_text(",".join(old_columns) + "\n" + ",".join(str(new[c]) for c in old_columns) + "\n")
     (old,) = read_curve(old_file)
     assert old["stages"] == "" and "### Where" not in "\n".join(curve_section([old], False, ["bc"]))
-    merged = merge_curve_rows([[old], [new]], plan, ["old", "new"])
-    assert [r["stages"] for r in merged] == [new["stages"]]
+    for parts, names in (([[old], [new]], ["old", "new"]), ([[new], [old]], ["new", "old"])):  # either order
+        assert [r["stages"] for r in merge_curve_rows(parts, plan, names)] == [new["stages"]]
     with pytest.raises(ValueError, match="differs between old and new in successes"):
         merge_curve_rows([[old], [{**new, "successes": 2}]], plan, ["old", "new"])
+    other = {**new, "stages": "none:0;reached:1;succeeded:1"}  # two parts that both hold stages must agree
+    with pytest.raises(ValueError, match="differs between new and other in stages"):
+        merge_curve_rows([[old], [new], [other]], plan, ["old", "new", "other"])  # named by the part that held it
+    # written: the column where any row holds it (the others empty), left out where none does
+    write_curve([old, {**new, "step": "b" * 16}], tmp_path / "mixed.csv")
+    assert [r["stages"] for r in read_curve(tmp_path / "mixed.csv")] == ["", new["stages"]]
+    write_curve([old], tmp_path / "once.csv")
+    write_curve(read_curve(tmp_path / "once.csv"), tmp_path / "twice.csv")
+    text = (tmp_path / "once.csv").read_text()
+    assert "stages" not in text.splitlines()[0] and (tmp_path / "twice.csv").read_text() == text
+
+
+def test_the_curve_s_stage_table_orders_the_task_s_stages_and_skips_points_without_episodes():
+    """Cells of one checkpoint whose counts list the stages in another order (or lack one) give one row in the
+    task's order; a checkpoint with no episodes has no shares to give."""
+    rows = [
+        {"method": "a", "task": "handle-press", "epochs": 5, "successes": 1, "episodes": 2,
+         "stages": "succeeded:1;none:1"},
+        {"method": "a", "task": "handle-press", "epochs": 5, "successes": 1, "episodes": 2,
+         "stages": "none:0;reached:0;moved:1;succeeded:1"},
+        {"method": "a", "task": "handle-press", "epochs": 10, "successes": 0, "episodes": 0,
+         "stages": "none:0;reached:0;moved:0;succeeded:0"},
+    ]  # fmt: skip
+    (first, second) = pooled_curve(rows)
+    assert list(first["stages"]) == ["none", "reached", "moved", "succeeded"]
+    text = "\n".join(curve_section(rows, plotted=False, methods=["a"]))
+    assert "| a | handle-press | 5 | 4 | 0.25 | 0.00 | 0.25 | 0.50 |" in text
+    assert "| a | handle-press | 10 |" not in text.split("### Where the curve's episodes end")[1]
 
 
 @pytest.mark.slow

@@ -4,6 +4,7 @@ the training it continues, and a learning curve's earlier points keep the shorte
 
 from __future__ import annotations
 
+import json
 import shutil
 from pathlib import Path
 
@@ -18,8 +19,10 @@ from lerobot_factorworld.study.results.curve import curve_rows
 from lerobot_factorworld.study.run.options import RunOptions
 
 
-def _command(folder: Path, epochs: float = 20, extends: tuple = (10,), name: str = "study") -> StudyCommand:
-    train = {"epochs": epochs, "curve_every": 5, "extends": list(extends)}
+def _command(
+    folder: Path, epochs: float = 20, extends: tuple = (10,), name: str = "study", curve_every: float = 5
+) -> StudyCommand:
+    train = {"epochs": epochs, "curve_every": curve_every, "extends": list(extends)}
     path = write_toy_study(folder / f"{name}.yaml", folder / name, train=train)
     return parse_config(StudyCommand, [f"--config_path={path}"], "study")
 
@@ -60,8 +63,6 @@ def test_bad_budgets_to_continue_are_refused_in_one_line(tmp_path, extends, mess
 
 @pytest.mark.slow
 def test_ten_epochs_continued_to_twenty_give_the_checkpoint_files_of_twenty_from_scratch(tmp_path):
-    import json
-
     from lerobot_factorworld.study.runner import run_study
 
     scratch = _command(tmp_path, extends=(), name="scratch")
@@ -96,3 +97,22 @@ def test_ten_epochs_continued_to_twenty_give_the_checkpoint_files_of_twenty_from
     # the curve reads each point's gradient step from the training that saved it (10 epochs: the shorter one's last)
     rows = curve_rows(grown.grid(), make_plan(grown.grid()), grown.grid().out_dir)
     assert [(r["epochs"], r["steps"]) for r in rows] == [(5, 32), (10, 64), (15, 96), (20, 128)]
+
+
+def test_a_chained_curve_s_point_at_a_link_s_end_is_that_link_s_last_step(tmp_path):
+    """Where a pass does not divide the budget (51 frames at batch 8, a point every 4 epochs, a link at 8), the
+    8-epoch point is the 8-epoch link's last checkpoint, ceil(8 x 51 / 8) = 51 steps, not the 52 a one-run
+    curve saves (2 x ceil(4 x 51 / 8)): curve.csv says which step each point is."""
+    cfg = _command(tmp_path, epochs=16, extends=(8,), curve_every=4).grid()
+    plan = make_plan(cfg)
+    short, long = plan.of_kind("train")
+    by_epochs = {s.meta[CURVE_EPOCHS]: s for s in plan.curve_points()}
+    assert {e: s.deps[0] for e, s in by_epochs.items()} == {4: short.key, 8: short.key, 12: long.key}
+    results = {short.key: {"steps": 51, "curve": {"4": 26}}, long.key: {"steps": 102, "curve": {"12": 78}}}
+    for step in plan.steps:
+        folder = step.folder(cfg.out_dir)
+        folder.mkdir(parents=True, exist_ok=True)
+        result = results.get(step.key, {"successes": [True]}) if step.kind != "collect" else {}
+        (folder / "result.json").write_text(json.dumps(result))
+    rows = curve_rows(cfg, plan, cfg.out_dir)
+    assert [(r["epochs"], r["steps"]) for r in rows] == [(4, 26), (8, 51), (12, 78), (16, 102)]

@@ -35,16 +35,21 @@ def cpu_of(cpuinfo: str) -> tuple[str, list[str]]:
     return model, [name for name in KERNEL_ISA if name in flags]
 
 
+def usable_cpus() -> int | None:
+    """The logical CPUs this process may run on (its affinity where the OS has one, as a container's limit)."""
+    return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
+
+
 @functools.cache
 def current() -> dict[str, Any]:
     """This machine: ``cpu`` (model), ``isa`` (its :data:`KERNEL_ISA` extensions; empty where the OS does not list
-    them), ``isa_cap`` (``ONEDNN_MAX_CPU_ISA``, or None) and ``cpus`` (logical CPUs). Read once per process."""
+    them), ``isa_cap`` (``ONEDNN_MAX_CPU_ISA``, or None) and ``cpus`` (:func:`usable_cpus`). Read once per process."""
     model, isa = cpu_of(CPUINFO.read_text()) if CPUINFO.is_file() else ("", [])
     return {
         "cpu": model or platform.processor() or platform.machine(),
         "isa": isa,
         "isa_cap": os.environ.get(ISA_CAP_ENV) or None,
-        "cpus": os.cpu_count(),
+        "cpus": usable_cpus(),
     }
 
 

@@ -63,9 +63,9 @@ def _stages(by_line: dict[tuple[str, str], dict[float, dict]]) -> list[str]:
     tables: dict[tuple[str, ...], list[str]] = {}
     for (method, task), points in by_line.items():
         for epochs, point in sorted(points.items()):
-            if not point["stages"]:
-                continue
             total = sum(point["stages"].values())
+            if not total:  # no stage counts (an older curve.csv), or no episodes
+                continue
             shares = " | ".join(f"{count / total:.2f}" for count in point["stages"].values())
             row = f"| {method} | {task} | {epochs:g} | {total} | {shares} |"
             tables.setdefault(tuple(point["stages"]), []).append(row)

@@ -12,6 +12,7 @@ from pathlib import Path
 from typing import Any
 
 from ...core.io import atomic_write_text, read_table
+from ...envs.stages import stage_names
 from ...protocol.conditions import TRAIN_SUITE
 from ..metrics import wilson_interval
 from ..plan.config import StudyConfig
@@ -91,6 +92,11 @@ def _row(cfg: StudyConfig, evaluation: Evaluation, epochs: float, saved_at: int)
     }
 
 
+def _in_task_order(task: str, counts: Counter) -> dict[str, int]:
+    """Stage counts in the task's order of stages (as ``results.csv`` writes them), any other stage after them."""
+    return {name: counts[name] for name in dict.fromkeys([*stage_names(task), *counts]) if name in counts}
+
+
 def write_curve(rows: Sequence[dict[str, Any]], path: Path) -> Path:
     """``curve.csv``; a later column no row holds is left out, so points read from an older file are written back
     as that file's bytes."""
@@ -127,5 +133,5 @@ def pooled_curve(rows: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
         low, high = wilson_interval(k, n)
         out.append({"method": method, "task": task, "epochs": epochs, "cells": cells, "successes": k,
                     "episodes": n, "success_rate": k / n if n else math.nan, "ci_low": low, "ci_high": high,
-                    "stages": dict(stages) if staged else {}})  # fmt: skip
+                    "stages": _in_task_order(task, stages) if staged else {}})  # fmt: skip
     return out

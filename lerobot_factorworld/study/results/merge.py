@@ -96,7 +96,9 @@ def merge_curve_rows(
                     f"the learning-curve point {row['step']} differs between {seen[1]} and {name} in "
                     f"{', '.join(differ)}"
                 )
-            seen[0].update({c: point[c] for c in OPTIONAL_CURVE_COLUMNS if point[c] != ""})
+            filled = {c: point[c] for c in OPTIONAL_CURVE_COLUMNS if point[c] != "" and seen[0][c] == ""}
+            if filled:  # this part agrees on every column and holds more: a later conflict is with it
+                by_step[row["step"]] = ({**seen[0], **filled}, name)
     rows = [row for row, _ in by_step.values()]
     return sorted(rows, key=lambda r: ([str(r[c]) for c in CURVE_CELL], r["epochs"]))
 
