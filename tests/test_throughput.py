@@ -85,6 +85,11 @@ def test_idle_workers_are_lent_to_a_collection_or_a_lone_training_without_changi
     lent = lend_idle_workers([[trains[0]], [collects[0]]], 3)  # a collection first takes what is idle
     assert lent[0][0].run.get("loader_workers", 0) == 0 and lent[1][0].run["workers"] == 2
     assert lend_idle_workers([[trains[0]], [trains[1]]], 2) == [[trains[0]], [trains[1]]]  # nothing idle
+    evals = plan.of_kind("eval")
+    beside = lend_idle_workers([evals[:3], [trains[0]]], 2)  # a training beside evaluations only: its loader too
+    assert beside[0] == evals[:3] and beside[1][0].run["loader_workers"] == 1
+    two = lend_idle_workers([[trains[0]], [trains[1]], evals[:3]], 3)  # two trainings: none lent beyond the idle
+    assert all(u[0].run.get("loader_workers", 0) == 0 for u in two)
     assert task_units(collects[:1], 3, grouped=False)[0][0].run.get("workers", 1) == 1  # per_step: as planned
 
 

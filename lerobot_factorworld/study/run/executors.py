@@ -254,7 +254,9 @@ def lend_idle_workers(units: list[list[Step]], free: int) -> list[list[Step]]:
     """``units`` with the workers they leave idle lent to their collections: a collection's jobs then run in
     that many more processes (``collect.workers`` never changes what is collected, so it is not in the key).
     The first collections get them first, one each in turn. With no collection to lend to, a training alone
-    gets one as its data loader (``steps.loader_args``: the same checkpoint, byte for byte)."""
+    gets one as its data loader (``steps.loader_args``: the same checkpoint, byte for byte), and so does the one
+    training dispatched beside evaluations only: they end within minutes, the training keeps its loader for
+    hours (a chain's next link starts beside the evaluation of the point before it)."""
     spare = free - len(units)
     collects = [i for i, unit in enumerate(units[:free]) if unit[0].kind == "collect"]
     trains = [i for i, unit in enumerate(units[:free]) if unit[0].kind == "train"]
@@ -266,7 +268,10 @@ def lend_idle_workers(units: list[list[Step]], free: int) -> list[list[Step]]:
         if more:
             out[i] = [_with_run(units[i][0], workers=units[i][0].run.get("workers", 1) + more)]
     if not collects:
-        for i in trains[: max(0, spare)]:
+        beside_evaluations = len(trains) == 1 and all(
+            unit[0].kind == "eval" for unit in units[:free] if unit is not units[trains[0]]
+        )
+        for i in trains[: max(1 if beside_evaluations else 0, spare)]:
             out[i] = [_with_run(units[i][0], loader_workers=1)]
     return out
 
