@@ -12,7 +12,7 @@ from typing import Any
 
 from ..metrics import newcombe_independent
 from ..results.curve import CURVE_FILE, pooled_curve
-from .markdown import ci
+from .markdown import ci, stage_row
 from .plots import draw_intervals, pyplot, save_figure
 
 CURVE_PLOT = "learning_curve.png"
@@ -66,9 +66,8 @@ def _stages(by_line: dict[tuple[str, str], dict[float, dict]]) -> list[str]:
             total = sum(point["stages"].values())
             if not total:  # no stage counts (an older curve.csv), or no episodes
                 continue
-            shares = " | ".join(f"{count / total:.2f}" for count in point["stages"].values())
-            row = f"| {method} | {task} | {epochs:g} | {total} | {shares} |"
-            tables.setdefault(tuple(point["stages"]), []).append(row)
+            names = tuple(point["stages"])
+            tables.setdefault(names, []).append(stage_row((method, task, f"{epochs:g}"), point["stages"], names))
     if not tables:
         return []
     lines = [

@@ -762,7 +762,7 @@ def _stages_section(cfg: StudyConfig, rows: list[dict]) -> list[str]:
             "| method | task | N | condition | episodes | " + " | ".join(names) + " |",
             "|---|---|---|---|---|" + "---|" * len(names),
         ]
-        lines += [_stage_row(key, counts[key], names) for key in table_keys]
+        lines += [stage_row(key, counts[key], names) for key in table_keys]
         lines.append("")
     return lines
 
@@ -786,7 +786,8 @@ def stage_tables(cfg: StudyConfig, counts: dict[tuple, dict[str, int]]) -> dict[
     return dict(tables)
 
 
-def _stage_row(key: tuple, counts: dict[str, int], names: Sequence[str]) -> str:
+def stage_row(key: tuple, counts: dict[str, int], names: Sequence[str]) -> str:
+    """A stage table's row: ``key``'s cells, the episodes, and their share at each of ``names``."""
     total = sum(counts.values())
     shares = " | ".join(f"{counts.get(name, 0) / total:.2f}" for name in names)
     return "| " + " | ".join(str(k) for k in key) + f" | {total} | {shares} |"

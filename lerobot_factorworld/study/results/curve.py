@@ -12,14 +12,13 @@ from pathlib import Path
 from typing import Any
 
 from ...core.io import atomic_write_text, read_table
-from ...envs.stages import stage_names
 from ...protocol.conditions import TRAIN_SUITE
 from ..metrics import wilson_interval
 from ..plan.config import StudyConfig
 from ..plan.grid import CURVE_EPOCHS, Plan
 from ..run.inputs import whole_epochs
 from ..run.steps import Step, is_done, read_result, step_folder
-from .rows import Evaluation, csv_text, parse_stage_counts, policy_of, stage_counts_text
+from .rows import Evaluation, csv_text, in_stage_order, parse_stage_counts, policy_of, stage_counts_text
 
 CURVE_FILE = "curve.csv"
 CURVE_COLUMNS = (
@@ -94,7 +93,7 @@ def _row(cfg: StudyConfig, evaluation: Evaluation, epochs: float, saved_at: int)
 
 def _in_task_order(task: str, counts: Counter) -> dict[str, int]:
     """Stage counts in the task's order of stages (as ``results.csv`` writes them), any other stage after them."""
-    return {name: counts[name] for name in dict.fromkeys([*stage_names(task), *counts]) if name in counts}
+    return {name: counts[name] for name in in_stage_order(task, counts) if name in counts}
 
 
 def write_curve(rows: Sequence[dict[str, Any]], path: Path) -> Path:

@@ -10,7 +10,7 @@ import csv
 import io
 import math
 from collections import Counter
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -162,8 +162,12 @@ def stage_counts_text(task: str, stages: Sequence[str] | None) -> str:
     if stages is None:
         return ""
     counts = Counter(stages)
-    names = dict.fromkeys([*stage_names(task), *counts])
-    return STAGE_SEPARATOR.join(f"{name}:{counts[name]}" for name in names)
+    return STAGE_SEPARATOR.join(f"{name}:{counts[name]}" for name in in_stage_order(task, counts))
+
+
+def in_stage_order(task: str, names: Iterable[str]) -> list[str]:
+    """Every stage of ``task`` in its order, then any other of ``names`` (a stage the task no longer defines)."""
+    return list(dict.fromkeys([*stage_names(task), *names]))
 
 
 def parse_stage_counts(text: str) -> dict[str, int]:

@@ -268,9 +268,8 @@ def lend_idle_workers(units: list[list[Step]], free: int) -> list[list[Step]]:
         if more:
             out[i] = [_with_run(units[i][0], workers=units[i][0].run.get("workers", 1) + more)]
     if not collects:
-        beside_evaluations = len(trains) == 1 and all(
-            unit[0].kind == "eval" for unit in units[:free] if unit is not units[trains[0]]
-        )
+        kinds = [unit[0].kind for unit in units[:free]]
+        beside_evaluations = kinds.count("train") == 1 and set(kinds) <= {"train", "eval"}
         for i in trains[: max(1 if beside_evaluations else 0, spare)]:
             out[i] = [_with_run(units[i][0], loader_workers=1)]
     return out
