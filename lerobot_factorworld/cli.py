@@ -15,6 +15,8 @@ Commands:
     compare-gaps    one factor's gap in two studies and their difference (--first=DIR --second=DIR --factor=F --task=T)
     compare-reruns  does a rerun land within the intervals of the results it repeats (--first=DIR --rerun=DIR)
     merge-results   a study made in parts (other machines, sessions) as one results.csv (--into=DIR --add=[DIR])
+    pack            what a study needs to go on on another machine, copied into a folder (--study=DIR --out=DIR)
+    unpack          a pack put into a study folder, checked first (--pack=DIR --study=DIR)
     sync-docs       regenerate the committed reports under docs/results and the docs tables fenced from them (--check)
 
 Every command reads its settings with :func:`lerobot_factorworld.core.settings.parse_config` (draccus +
@@ -460,6 +462,87 @@ def cmd_merge_results(args: list[str]) -> None:
 
 
 @dataclass
+class PackConfig:
+    """``factorworld pack``: what a rerun of a study on another machine needs to go on from where it is, copied into
+    a folder (``study/run/pack.py``: datasets, older optimizer states and unfinished evaluations are left out).
+    Works on a running study too: a training's newest save is copied whole.
+
+    Attributes:
+        study: The study's folder (its ``out_dir``).
+        out: The pack's folder: a new one, or an older pack, replaced once the new one is complete.
+    """
+
+    study: str = ""
+    out: str = ""
+
+    def __post_init__(self) -> None:
+        if not self.study or not self.out:
+            raise ValueError("factorworld pack needs --study=STUDY_DIR --out=PACK_DIR")
+        check_folder_target(self.out, "out")
+        # the pack's module reads step folders by steps.py's names, which imports the dataset stack (~3 s)
+        from .study.run.pack import check_pack_target  # noqa: PLC0415
+
+        check_pack_target(Path(self.study), Path(self.out))
+
+
+def cmd_pack(args: list[str]) -> None:
+    # as in PackConfig: steps.py's dataset stack, only when this command runs
+    from .study.run.pack import pack  # noqa: PLC0415
+
+    cfg = parse_config(PackConfig, args, "pack")
+    packed = pack(cfg.study, cfg.out)
+    print(f"packed {packed.files} file(s), {packed.size / 1e6:.1f} MB, into {packed.folder}")
+    for rel in packed.trainings:
+        print(f"  training in progress, carried with its newest save: {rel}")
+    if packed.linked:
+        print(f"  left out {len(packed.linked)} step(s) linked from other studies (reuse_from): pack those studies")
+    if packed.unfinished:
+        print(f"  left out {len(packed.unfinished)} unfinished step(s): they start over where the study runs next")
+    print(
+        f"go on elsewhere: factorworld unpack --pack={packed.folder} --study={cfg.study}, then the same study command"
+    )
+
+
+@dataclass
+class UnpackConfig:
+    """``factorworld unpack``: a pack's files put into a study folder, every file checked before anything is
+    written; a file already there must be the same (nothing is replaced).
+
+    Attributes:
+        pack: The pack's folder (written by ``factorworld pack``).
+        study: The study folder to fill (made if absent; the study config's ``out_dir``); default: the folder the
+            pack was made from, as it was named there.
+    """
+
+    pack: str = ""
+    study: str = ""
+
+    def __post_init__(self) -> None:
+        if not self.pack:
+            raise ValueError("factorworld unpack needs --pack=PACK_DIR (and --study=STUDY_DIR)")
+        # as in PackConfig: steps.py's dataset stack, only when this command runs
+        from .study.run.pack import read_manifest  # noqa: PLC0415
+
+        self.study = self.study or read_manifest(self.pack)["study"]
+        check_folder_target(self.study, "study")
+
+
+def cmd_unpack(args: list[str]) -> None:
+    # as in cmd_pack: the pack's module imports steps.py's dataset stack
+    from .study.run.pack import read_manifest, unpack  # noqa: PLC0415
+
+    cfg = parse_config(UnpackConfig, args, "unpack")
+    manifest = read_manifest(cfg.pack)
+    done = unpack(cfg.pack, cfg.study)
+    print(
+        f"unpacked into {cfg.study}: {done.written} file(s) written, {done.present} already there, {done.links} link(s)"
+    )
+    for rel in manifest["in_progress"]:
+        print(f"  a training in progress goes on from its newest save: {rel}")
+    print("go on with the study's command (it collects the left-out datasets again first)")
+
+
+@dataclass
 class SyncDocsConfig:
     """``factorworld sync-docs``: regenerate every committed study report (``docs/results/<study>/``) and rewrite
     the tables of ``docs/*.md`` fenced from them (``study/report/published.py``).
@@ -511,6 +594,8 @@ COMMANDS: dict[str, Callable[[list[str]], None]] = {
     "compare-gaps": cmd_compare_gaps,
     "compare-reruns": cmd_compare_reruns,
     "merge-results": cmd_merge_results,
+    "pack": cmd_pack,
+    "unpack": cmd_unpack,
     "sync-docs": cmd_sync_docs,
 }
 

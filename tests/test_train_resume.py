@@ -18,6 +18,8 @@ from pathlib import Path
 import pytest
 from toy_study import write_toy_study
 
+from lerobot_factorworld.study.run.pack import pack as pack_study
+
 # Both tests read one uninterrupted run (a module fixture): one xdist worker runs them, one after the other.
 pytestmark = pytest.mark.xdist_group("train_resume")
 PASS_STEPS = 7  # ceil(51 frames / 8): the toy's two demos hold 51 frames
@@ -109,6 +111,45 @@ def test_a_study_killed_mid_training_resumes_and_ends_with_the_uninterrupted_che
     _same_checkpoints(study, uninterrupted, why)
     # the saves only a rerun needed are gone: the curve-less training keeps its last and the newest pass's end
     assert _saved(study) == [STEPS // PASS_STEPS * PASS_STEPS, STEPS], why
+
+
+@pytest.mark.slow
+def test_a_training_packed_on_a_machine_that_goes_away_goes_on_elsewhere_to_the_uninterrupted_checkpoint(
+    uninterrupted, tmp_path
+):
+    """Packed while it trains (``factorworld pack``), the study's machine then lost (kill -9, its folder deleted),
+    unpacked into another folder: the rerun there collects the dataset again and ends with the same checkpoint."""
+    config = _config(tmp_path / "first")
+    study = config.parent / "study"
+    _copy_collection(uninterrupted, study)
+    pack = tmp_path / "pack"
+
+    def start() -> subprocess.Popen:
+        return subprocess.Popen(
+            _study(config), stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True
+        )
+
+    def pack_then_lose_the_machine(proc: subprocess.Popen) -> None:
+        pack_study(study, pack)  # in this process: the command's 3 s of imports would outlast the toy's training
+        _kill_group(proc)
+
+    why, _ = _kill_at_random_save(start, study, pack_then_lose_the_machine)
+    shutil.rmtree(study)
+    assert not (pack / "steps" / "collect").exists()  # the dataset is not carried: it is collected again
+    elsewhere = _config(tmp_path / "second")
+    moved = elsewhere.parent / "study"
+    factorworld("unpack", f"--pack={pack}", f"--study={moved}")
+    subprocess.run(_study(elsewhere), check=True, capture_output=True, timeout=600)
+    result = json.loads((_train_folder(moved) / "result.json").read_text())
+    assert result["resumed_from"] > 0 and result["resumed_from"] % PASS_STEPS == 0, why
+    runs = result["trained_on"]  # both runs recorded, on this machine, on datasets of the same content
+    assert [run["from_step"] for run in runs] == [0, result["resumed_from"]], why
+    assert runs[0]["dataset"] == runs[1]["dataset"] and runs[0]["dataset"].startswith("sha256:"), runs
+    _same_checkpoints(moved, uninterrupted, why)
+
+
+def factorworld(*args: str) -> None:
+    subprocess.run([sys.executable, "-m", "lerobot_factorworld.cli", *args], check=True, capture_output=True)
 
 
 def _ray_training_workers() -> list[int]:

@@ -512,6 +512,7 @@ def _merge(cfg: CollectConfig, root: Path, parts: Path, jobs: list[Job], results
     if merged.exists():
         shutil.rmtree(merged)
     aggregate_datasets(repo_ids, cfg.repo_id, roots=sources, aggr_root=merged)
+    write_stats_in_feature_order(merged)
     environments = [r["config"] for r in results]
     failures = {r["job_id"]: r["failures"] for r in results}
     history = []
@@ -539,6 +540,19 @@ def _merge(cfg: CollectConfig, root: Path, parts: Path, jobs: list[Job], results
     meta = LeRobotDatasetMetadata(cfg.repo_id, root=root)
     write_card(meta)
     return meta.total_episodes, meta.total_frames
+
+
+def write_stats_in_feature_order(root: Path) -> None:
+    """Rewrite ``meta/stats.json`` with its features in ``info.json``'s order. LeRobot 0.6.1 aggregates the stats
+    over a set of feature names, so their order in the file follows Python's per-process string hashing: two
+    collections of the same demos would differ in that file's bytes (never in its numbers), and so would the
+    dataset's content hash that a training's record of its runs compares (``study/run/steps.py``)."""
+    path = root / "meta" / "stats.json"
+    stats = json.loads(path.read_text(encoding="utf-8"))
+    features = json.loads((root / "meta" / "info.json").read_text(encoding="utf-8"))["features"]
+    order = [name for name in features if name in stats] + sorted(name for name in stats if name not in features)
+    # LeRobot's own format (lerobot.utils.io_utils.write_json), so a reader sees no other change
+    atomic_write_text(path, json.dumps({name: stats[name] for name in order}, indent=4, ensure_ascii=False))
 
 
 def _read_sidecar(root: Path) -> dict | None:

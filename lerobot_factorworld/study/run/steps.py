@@ -35,6 +35,7 @@ from typing import Any
 
 from ... import __version__  # the package root registers the env and policy types (in a fresh worker too)
 from ...core import machine, provenance
+from ...core.fingerprint import folder_fingerprint
 from ...core.io import atomic_write_text
 from ...core.memory import keep_freed_memory
 from ...core.timing import Timings
@@ -67,6 +68,8 @@ LOG_FILE = "log.txt"
 DATA_DIR = "data"
 MERGED_DATA_DIR = "merged_data"  # a training step's own dataset when other tasks' data joins the task's
 TRAIN_DIR = "train"
+RUNS_FILE = "runs.json"  # in a training's step folder: each run of it (from which step, on which machine and dataset)
+TRAINED_ON = "trained_on"  # result entry of a training: its runs, the trainings it extends first; never in a key
 CHECKPOINT = "checkpoints/last/pretrained_model"
 RESULT_PATHS = ("root", "checkpoint")  # result entries that name files: stored relative to the study folder
 DISTRIBUTION = "lerobot_env_factorworld"
@@ -466,6 +469,7 @@ def _run_train(step: Step, folder: Path, deps: list[Path]) -> dict[str, Any]:
     saves = Saves(steps, save_freq, str(out), inputs.batch_size, every_passes=step.run.get("save_every_passes", 1))
     state = _starting_state(out, prefix, saves, curve)
     start_step = step_of(state) if state is not None else 0
+    runs = _record_run(folder, start_step, Path(data["root"])) if start_step < steps else _recorded_runs(folder)
     cmd = [
         sys.executable,
         "-m",
@@ -508,7 +512,25 @@ def _run_train(step: Step, folder: Path, deps: list[Path]) -> dict[str, Any]:
         result["resumed_from"] = start_step
     if prefix is not None:
         result["extends"] = prefix.parent.name
+    prefix_runs = read_result(prefix.parent).get(TRAINED_ON, []) if prefix is not None else []
+    result[TRAINED_ON] = [run for run in prefix_runs if run["from_step"] < (runs[0]["from_step"] if runs else 0)] + runs
     return result
+
+
+def _recorded_runs(folder: Path) -> list[dict[str, Any]]:
+    path = folder / RUNS_FILE
+    return json.loads(path.read_text()) if path.is_file() else []
+
+
+def _record_run(folder: Path, start_step: int, dataset: Path) -> list[dict[str, Any]]:
+    """Record that the training in the step ``folder`` runs from ``start_step`` here (``runs.json``): the machine and the dataset's content
+    hash. A training resumed on another machine, or on a dataset collected again there, is then told apart from
+    one that ran in one go; a run that saved nothing before it was stopped left no mark on the weights, so a run
+    from the same step replaces it."""
+    runs = [run for run in _recorded_runs(folder) if run["from_step"] < start_step]
+    runs.append({"from_step": start_step, "machine": machine.current(), "dataset": folder_fingerprint(dataset)})
+    atomic_write_text(folder / RUNS_FILE, json.dumps(runs, indent=1, sort_keys=True))
+    return runs
 
 
 def _starting_state(out: Path, prefix: Path | None, saves: Saves, curve: dict[str, int]) -> Path | None:
