@@ -24,8 +24,8 @@ def _save(train: Path, step: int) -> None:
 
 
 def _study(root: Path) -> Path:
-    """A study folder: a dataset, a finished training (a curve point and its last save), one in progress (two
-    pass-end saves, a half-written third), a finished and an unfinished evaluation, a step linked from elsewhere."""
+    """A study folder: a dataset, a finished training (a curve point and its last save) and a finished one that
+    continued it, one in progress (two pass-end saves, a half-written third), a finished and an unfinished evaluation, a step linked from elsewhere."""
     study = root / "study"
     (study / "config.json").parent.mkdir(parents=True)
     (study / "config.json").write_text("{}")
@@ -39,6 +39,9 @@ def _study(root: Path) -> Path:
     _save(done, 14)
     (done / "checkpoints" / "last").symlink_to("000014")
     (done.parent / "result.json").write_text('{"checkpoint": "steps/train/t1/train/checkpoints/last/pretrained_model"}')
+    longer = study / "steps" / "train" / "t3" / "train"  # finished, continued from t1's last save
+    _save(longer, 21)
+    (longer.parent / "result.json").write_text('{"extends": "t1"}')
     running = study / "steps" / "train" / "t2" / "train"
     _save(running, 21)
     _save(running, 28)
@@ -67,11 +70,13 @@ def test_a_pack_carries_what_a_rerun_needs_and_leaves_out_what_it_makes_again(tm
     study = _study(tmp_path)
     packed = pack(study, tmp_path / "pack")
     carried = _files(tmp_path / "pack") - {MANIFEST}
-    t1, t2 = "steps/train/t1/train/checkpoints", "steps/train/t2/train/checkpoints"
+    t1, t2, t3 = (f"steps/train/{key}/train/checkpoints" for key in ("t1", "t2", "t3"))
     expected = {"config.json", "steps/train/t1/result.json", f"{t1}/last", "steps/train/t2/step.json"}
     expected |= {"steps/train/t2/train/sampler.json", "steps/eval/e1/step.json", "steps/eval/e1/result.json"}
-    expected |= {f"{t}/{step:06d}/{name}" for t, step in ((t1, 14), (t2, 28)) for name in COMPLETE}  # newest: whole
-    expected |= {f"{t}/{step:06d}/{name}" for t, step in ((t1, 7), (t2, 21)) for name in COMPLETE if "model/" in name}
+    expected.add("steps/train/t3/result.json")
+    expected |= {f"{t}/{step:06d}/{name}" for t, step in ((t2, 28), (t3, 21)) for name in COMPLETE}  # newest: whole
+    weights = ((t1, 7), (t1, 14), (t2, 21))  # older saves, and t1's newest, which t3 has continued: weights only
+    expected |= {f"{t}/{step:06d}/{name}" for t, step in weights for name in COMPLETE if "model/" in name}
     assert carried == expected
     assert (packed.trainings, packed.linked, packed.unfinished) == (
         ("steps/train/t2",),
@@ -142,4 +147,4 @@ def test_the_commands_say_what_was_carried_and_how_to_go_on(tmp_path, capsys):
     assert "left out 1 step(s) linked from other studies" in out and "left out 1 unfinished step(s)" in out
     main(["unpack", f"--pack={tmp_path / 'pack'}", f"--study={tmp_path / 'moved'}"])
     out = capsys.readouterr().out
-    assert f"unpacked into {tmp_path / 'moved'}: 20 file(s) written, 0 already there, 1 link(s)" in out
+    assert f"unpacked into {tmp_path / 'moved'}: 23 file(s) written, 0 already there, 1 link(s)" in out

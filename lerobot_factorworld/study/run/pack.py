@@ -7,7 +7,8 @@ rerun either makes again by itself or never reads. A pack leaves out:
 
 - collection steps (their datasets): the rerun collects them again from the same seeds;
 - the training state (optimizer, RNG) of every save but each training's newest, the one a rerun or a longer
-  training that extends it continues from; every save's weights stay (an evaluation added later reads them);
+  training that extends it continues from, and that one too once a finished longer training has continued it;
+  every save's weights stay (an evaluation added later reads them);
 - steps that have not finished, except trainings (an evaluation, a collection starts over anyway);
 - steps linked from another study (``reuse_from``): pack that study, they are its steps;
 - saves half written by a kill, the lock, the report (``factorworld report`` and the next run rewrite it).
@@ -66,6 +67,7 @@ def pack(study_dir: str | Path, out: str | Path) -> Packed:
     files: dict[str, str] = {}
     links: dict[str, str] = {}
     trainings, linked, unfinished = [], [], []
+    continued = _continued_trainings(study)
     for rel in STUDY_FILES:
         if (study / rel).is_file():
             files[rel] = _copy(study / rel, partial / rel)
@@ -83,7 +85,7 @@ def pack(study_dir: str | Path, out: str | Path) -> Packed:
             continue
         if not done:
             trainings.append(rel)
-        step_files, step_links = _copy_step(step, study, partial)
+        step_files, step_links = _copy_step(step, study, partial, keep_state=step.name not in continued)
         files.update(step_files)
         links.update(step_links)
     manifest = {
@@ -126,14 +128,26 @@ def _step_folders(study: Path) -> Iterator[Path]:
             yield from sorted(kind.iterdir())
 
 
-def _copy_step(step: Path, study: Path, partial: Path, tries: int = 3) -> tuple[dict[str, str], dict[str, str]]:
+def _continued_trainings(study: Path) -> set[str]:
+    """Keys of the trainings a finished longer training has continued (``extends`` in its result): their newest
+    state has been read, and nothing goes on from it again."""
+    keys = set()
+    for result in (study / STEPS_DIR / "train").glob(f"*/{RESULT_FILE}"):
+        if not result.parent.is_symlink():
+            keys.add(json.loads(result.read_text()).get("extends"))
+    return keys - {None}
+
+
+def _copy_step(
+    step: Path, study: Path, partial: Path, keep_state: bool, tries: int = 3
+) -> tuple[dict[str, str], dict[str, str]]:
     """Copy one step folder's carried files into ``partial``: ``({name: sha256}, {name: link})``. A training that
     runs meanwhile may replace its newest save (the older is deleted once the newer is in place): then the step is
     copied again from a fresh listing."""
     for attempt in range(tries):
         files, links = {}, {}
         try:
-            for path, link in _carried(step, study):
+            for path, link in _carried(step, study, keep_state):
                 name = path.relative_to(study).as_posix()
                 if link is not None:
                     links[name] = link
@@ -159,12 +173,12 @@ def _link_target(path: Path, study: Path) -> str:
     return os.path.relpath(resolved, path.parent.resolve()) if os.path.isabs(target) else target
 
 
-def _carried(step: Path, study: Path) -> list[tuple[Path, str | None]]:
+def _carried(step: Path, study: Path, keep_state: bool) -> list[tuple[Path, str | None]]:
     """``(path, link target or None)`` of what a pack carries of one step folder: everything but half-written saves
-    and the training state of saves older than the training's newest."""
+    and the training state of saves older than the training's newest (of every save, without ``keep_state``)."""
     checkpoints = step / TRAIN_DIR / CHECKPOINTS_DIR
     saves = saved_steps(step / TRAIN_DIR)
-    newest = max(saves, default=None)
+    newest = max(saves, default=None) if keep_state else None
     carried = []
     for path in sorted(step.rglob("*")):
         rel = path.relative_to(step).parts
