@@ -304,7 +304,7 @@ def test_a_method_s_own_training_settings_key_its_training_alone(tmp_path):
     [
         (
             {"train: {epochs: 2,": "train: {lr: 1, epochs: 2,"},
-            "method 'transformer': unknown train setting.s. lr; valid: steps, epochs, batch_size, curve_every, extra_args",
+            "method 'transformer': unknown train setting.s. lr; valid: steps, epochs, batch_size, curve_every, extends, extra_args",
         ),
         ({"{epochs: 2,": "{steps: 5,"}, "method 'transformer': train.curve_every is a number of epochs below"),
         ({"batch_size: 4,": "batch_size: 0,"}, "method 'transformer': train.batch_size must be at least 1, got 0"),
@@ -319,6 +319,9 @@ def test_a_method_s_own_training_settings_key_its_training_alone(tmp_path):
         ({"curve_every: 1}": "curve_every: 2}"}, "method 'transformer': train.curve_every is a number of epochs below"),
         ({"epochs: 2,": "epochs: .nan,"}, "method 'transformer': train.epochs must be a positive number, got nan"),
         ({"curve_every: 1}": "curve_every: .inf}"}, "method 'transformer': train.curve_every is a number of epochs"),
+        ({"curve_every: 1}": "extends: 1}"}, "method 'transformer': train.extends must be a list of numbers"),
+        ({"curve_every: 1}": "extends: [one]}"}, "method 'transformer': train.extends must be a list of numbers"),
+        ({"curve_every: 1}": "extends: [1, 1]}"}, "method 'transformer': train.extends is a list of increasing"),
     ],
 )
 def test_a_method_s_bad_training_settings_are_refused_naming_the_method(tmp_path, edits, message):

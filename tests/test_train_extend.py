@@ -52,6 +52,24 @@ def test_a_continued_training_is_keyed_by_the_one_it_continues_and_costs_only_it
     assert "continues: bc 10 -> 20 epochs (trains only the 10 new epochs" in text and "to run)" in text
 
 
+def test_a_method_s_own_extends_chains_its_training_as_the_study_s_does(tmp_path):
+    """F9's RT-1 arm continues the chain of learning/rt1_curve_pick_160 by setting the chain in its own ``train``:
+    the same keys as the chain set in the study's ``train``, and the study's other methods train in one run."""
+    settings = {"epochs": 20, "curve_every": 5, "extends": [10]}
+    chained = make_plan(_command(tmp_path).grid())
+    methods = [
+        {"name": "bc", "policy": {"type": "bc"}, "train": settings},
+        {"name": "bc_lang", "policy": {"type": "bc", "use_language": True}},
+    ]
+    path = write_toy_study(tmp_path / "own.yaml", tmp_path / "own", methods=methods, train={"epochs": 20})
+    own = make_plan(parse_config(StudyCommand, [f"--config_path={path}"], "study").grid())
+    trains = {s.meta["method"]: [] for s in own.of_kind("train")}
+    for step in own.of_kind("train"):
+        trains[step.meta["method"]].append(step.key)
+    assert trains["bc"] == [s.key for s in chained.of_kind("train")] and len(trains["bc_lang"]) == 1
+    assert {s.key for s in chained.curve_points()} <= {s.key for s in own.curve_points()}
+
+
 @pytest.mark.parametrize(
     ("extends", "message"),
     [((10, 5), "increasing epochs below train.epochs"), ((20,), "increasing epochs"), ((0,), "increasing")],

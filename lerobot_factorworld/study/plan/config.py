@@ -114,7 +114,7 @@ def check_device(setting: str, device: str) -> None:
         raise ValueError(f"unknown {setting} {device!r}; valid: cpu, cuda, cuda:<index>, mps")
 
 
-METHOD_TRAIN_SETTINGS = ("steps", "epochs", "batch_size", "curve_every", "extra_args")  # a method may set its own
+METHOD_TRAIN_SETTINGS = ("steps", "epochs", "batch_size", "curve_every", "extends", "extra_args")  # a method's own
 
 
 def _train_value(method: str, name: str, value: Any) -> Any:
@@ -126,11 +126,19 @@ def _train_value(method: str, name: str, value: Any) -> Any:
         return resolve_arg_paths(value)
     if value is None and name == "epochs":
         return None
+    if name == "extends":  # budgets, as the study's train.extends holds them (checked with the rest: _check_train)
+        if not isinstance(value, list) or not all(_is_number(b) for b in value):
+            raise ValueError(f"method {method!r}: train.extends must be a list of numbers (budgets), got {value!r}")
+        return [float(budget) for budget in value]
     whole = name in ("steps", "batch_size")
-    if isinstance(value, bool) or not isinstance(value, int | float) or (whole and value != int(value)):
+    if not _is_number(value) or (whole and value != int(value)):
         kind = "a whole number" if whole else "a number"
         raise ValueError(f"method {method!r}: train.{name} must be {kind}, got {value!r}")
     return int(value) if whole else float(value)
+
+
+def _is_number(value: Any) -> bool:
+    return not isinstance(value, bool) and isinstance(value, int | float)
 
 
 @dataclass
@@ -637,8 +645,8 @@ class StudyConfig:
         """The training settings ``method`` trains with: the study's ``train`` with the method's own ``train``
         over them (``steps`` clears the study's ``epochs`` and ``curve_every``)."""
         own = dict(method.train)
-        if "steps" in own:  # a number of steps: no epochs, so no curve unless the method asks for one
-            own = {"epochs": None, "curve_every": 0, **own}
+        if "steps" in own:  # a number of steps: no epochs, so no curve or epochs to extend unless the method asks
+            own = {"epochs": None, "curve_every": 0, "extends": [], **own}
         return replace(self.train, **own) if own else self.train
 
     def curve_methods(self) -> list[MethodConfig]:
