@@ -19,7 +19,15 @@ from lerobot_factorworld.study.plan.command import StudyCommand
 from lerobot_factorworld.study.plan.config import TrainSettings
 from lerobot_factorworld.study.plan.grid import CURVE_EPOCHS, make_plan
 from lerobot_factorworld.study.report.curve_report import curve_section
-from lerobot_factorworld.study.results.curve import CURVE_COLUMNS, CURVE_FILE, pooled_curve, read_curve, write_curve
+from lerobot_factorworld.study.results.curve import (
+    CURVE_COLUMNS,
+    CURVE_FILE,
+    OPTIONAL_CURVE_COLUMNS,
+    machines_text,
+    pooled_curve,
+    read_curve,
+    write_curve,
+)
 from lerobot_factorworld.study.results.merge import merge_curve_rows
 from lerobot_factorworld.study.results.rows import parse_stage_counts
 from lerobot_factorworld.study.run.inputs import EvalInputs, TrainInputs
@@ -119,6 +127,28 @@ def test_the_curve_section_gives_each_step_along_a_curve_and_each_method_against
     assert "### Differences" not in "\n".join(curve_section(rows[:1], plotted=False, methods=["a"]))
 
 
+def test_the_curve_says_which_machines_trained_each_checkpoint(tmp_path):
+    """A checkpoint's machines are its training's runs before the step it was saved at (``trained_on``), each once in
+    the order they trained; the report says so in one sentence for one machine, per checkpoint otherwise."""
+    amd = {"cpu": "AMD EPYC", "isa": ["avx2"], "isa_cap": None, "cpus": 2}
+    intel = {"cpu": "Intel Xeon", "isa": ["amx_bf16", "avx2"], "isa_cap": None, "cpus": 2}
+    runs = [{"from_step": 0, "machine": amd}, {"from_step": 100, "machine": intel}, {"from_step": 200, "machine": amd}]
+    assert machines_text(runs, 100) == "AMD EPYC; avx2; 2 CPUs"
+    assert machines_text(runs, 300) == "AMD EPYC; avx2; 2 CPUs | Intel Xeon; amx_bf16, avx2; 2 CPUs"
+    assert machines_text([], 300) == ""
+    rows = [{"method": "a", "task": "t", "epochs": e, "successes": 1, "episodes": 4, "stages": "",
+             "trained_on": machines_text(runs, at)} for e, at in ((10, 100), (20, 300))]  # fmt: skip
+    text = "\n".join(curve_section(rows, plotted=False, methods=["a"]))
+    assert "### Which machines trained the curve" in text
+    assert "| a | t | 10 | AMD EPYC; avx2; 2 CPUs |" in text
+    assert "| a | t | 20 | AMD EPYC; avx2; 2 CPUs; then Intel Xeon; amx_bf16, avx2; 2 CPUs |" in text
+    one = "\n".join(curve_section(rows[:1], plotted=False, methods=["a"]))
+    assert "One machine trained every checkpoint: AMD EPYC; avx2; 2 CPUs." in one
+    assert "### Which machines" not in "\n".join(curve_section([{**rows[0], "trained_on": ""}], False, ["a"]))
+    path = write_curve([{c: rows[1].get(c, 0) for c in CURVE_COLUMNS}], tmp_path / CURVE_FILE)
+    assert read_curve(path)[0]["trained_on"] == rows[1]["trained_on"]  # the separator survives the CSV
+
+
 def test_the_curve_shows_where_each_checkpoint_s_episodes_end_and_reads_older_files_without_it(tmp_path):
     """Each checkpoint's episodes by furthest stage, pooled over cells: a point one of whose cells has no stage
     counts gets no row; a curve.csv written before the column existed is read (stages empty) and merged with a
@@ -149,7 +179,7 @@ def test_the_curve_shows_where_each_checkpoint_s_episodes_end_and_reads_older_fi
            "widths": "default", "epochs": 1, "steps": 7, "episodes": 2, "successes": 1, "success_rate": 0.5,
            "ci_low": 0.1, "ci_high": 0.9, "step": point.key, "stages": "none:1;reached:0;succeeded:1"}  # fmt: skip
     old_file = tmp_path / "old.csv"
-    old_columns = [c for c in CURVE_COLUMNS if c != "stages"]
+    old_columns = [c for c in CURVE_COLUMNS if c not in OPTIONAL_CURVE_COLUMNS]
     old_file.write_text(",".join(old_columns) + "\n" + ",".join(str(new[c]) for c in old_columns) + "\n")
     (old,) = read_curve(old_file)
     assert old["stages"] == "" and "### Where" not in "\n".join(curve_section([old], False, ["bc"]))

@@ -53,7 +53,31 @@ def curve_section(rows: Sequence[dict[str, Any]], plotted: bool, methods: Sequen
     lines += ["", "Each cell: P_T [95% interval] (episodes)."]
     if plotted:
         lines += ["", f"![learning curve]({CURVE_PLOT})", "", f"*{CURVE_CAPTION}*"]
-    return [*lines, *_differences(by_line, epochs, methods), *_stages(by_line), ""]
+    return [*lines, *_differences(by_line, epochs, methods), *_stages(by_line), *_machines(by_line), ""]
+
+
+def _machines(by_line: dict[tuple[str, str], dict[float, dict]]) -> list[str]:
+    """Which machines trained the curve's checkpoints (``trained_on``): one sentence when one machine trained them
+    all, else a row per checkpoint, since a training resumed on another CPU differs in its last bits from one that
+    ran on one (docs/study.md, "Across machines"); nothing for a curve.csv that does not say."""
+    points = [(line, epochs, p["trained_on"]) for line, ps in by_line.items() for epochs, p in sorted(ps.items())]
+    if not any(machines for *_, machines in points):
+        return []
+    lines = ["", "### Which machines trained the curve", ""]
+    every = {machines for *_, machines in points}
+    if len(every) == 1 and len(next(iter(every))) == 1:
+        return [*lines, f"One machine trained every checkpoint: {next(iter(every))[0]}."]
+    lines += [
+        "A checkpoint trained on more than one machine (a training resumed elsewhere, `factorworld unpack`) is not "
+        "byte for byte the one a single machine would make where their kernels differ (docs/study.md, *Across "
+        "machines*); the machines in the order they trained it, from each training's `trained_on`:",
+        "",
+        "| method | task | epochs | trained on |",
+        "|---|---|---|---|",
+    ]
+    for (method, task), epochs, machines in points:
+        lines.append(f"| {method} | {task} | {epochs:g} | {'; then '.join(machines) or 'not recorded'} |")
+    return lines
 
 
 def _stages(by_line: dict[tuple[str, str], dict[float, dict]]) -> list[str]:

@@ -11,13 +11,14 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
+from ...core import machine
 from ...core.io import atomic_write_text, read_table
 from ...protocol.conditions import TRAIN_SUITE
 from ..metrics import wilson_interval
 from ..plan.config import StudyConfig
 from ..plan.grid import CURVE_EPOCHS, Plan
 from ..run.inputs import whole_epochs
-from ..run.steps import Step, is_done, read_result, step_folder
+from ..run.steps import TRAINED_ON, Step, is_done, read_result, step_folder
 from .rows import Evaluation, csv_text, in_stage_order, parse_stage_counts, policy_of, stage_counts_text
 
 CURVE_FILE = "curve.csv"
@@ -38,8 +39,10 @@ CURVE_COLUMNS = (
     "ci_high",
     "step",  # key of the eval step
     "stages",  # episodes per furthest stage, as results.csv's column: where the checkpoint's failures end
+    "trained_on",  # the machines that trained the checkpoint, in the order they did (MACHINES_SEPARATOR between)
 )
-OPTIONAL_CURVE_COLUMNS = ("stages",)  # added later: older curve.csv files lack it
+OPTIONAL_CURVE_COLUMNS = ("stages", "trained_on")  # added later: older curve.csv files lack them
+MACHINES_SEPARATOR = " | "  # between the machines of trained_on (machine.describe's text holds ';' and ',')
 CELL = ("method", "task", "n_train_envs", "seed", "widths")
 
 
@@ -60,8 +63,16 @@ def curve_rows(cfg: StudyConfig, plan: Plan, study_dir: str | Path) -> list[dict
             trainings[key] = read_result(step_folder(study_dir, "train", key))
         trained = trainings[key]
         saved_at = trained.get("curve", {}).get(str(epochs), trained["steps"])
-        rows.append(_row(cfg, Evaluation(step, read_result(step, study_dir)), epochs, saved_at))
+        row = _row(cfg, Evaluation(step, read_result(step, study_dir)), epochs, saved_at)
+        rows.append({**row, "trained_on": machines_text(trained.get(TRAINED_ON, []), saved_at)})
     return sorted(rows, key=lambda r: ([str(r[c]) for c in CELL], r["epochs"]))
+
+
+def machines_text(runs: Sequence[dict[str, Any]], saved_at: int) -> str:
+    """The machines that trained a checkpoint saved at ``saved_at``, from its training's runs (``trained_on``):
+    each distinct one once, in the order it first trained ("" for a training that recorded none)."""
+    machines = [machine.describe(run["machine"]) for run in runs if run["from_step"] < saved_at]
+    return MACHINES_SEPARATOR.join(dict.fromkeys(machines))
 
 
 def last_points(plan: Plan) -> list[Step]:
@@ -117,8 +128,9 @@ def pooled_curve(rows: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
     """Per (method, task, epochs): the episodes and successes summed over N, seeds and widths, with the Wilson
     95% interval of the pooled rate (episodes of one checkpoint are independent given it; seeds add variance
     this interval does not hold, so it is a lower bound on the spread between seeds), and the episodes per
-    furthest stage summed the same way (``{}`` where a row has no stage counts)."""
-    pooled: dict[tuple, list] = defaultdict(lambda: [0, 0, 0, Counter(), True])
+    furthest stage summed the same way (``{}`` where a row has no stage counts), and the machines that trained
+    its checkpoints (``trained_on``, each once)."""
+    pooled: dict[tuple, list] = defaultdict(lambda: [0, 0, 0, Counter(), True, {}])
     for row in rows:
         point = pooled[(row["method"], row["task"], float(row["epochs"]))]
         point[0] += row["successes"]
@@ -127,10 +139,12 @@ def pooled_curve(rows: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
         stages = parse_stage_counts(row.get("stages", ""))
         point[3].update(stages)
         point[4] = point[4] and bool(stages)
+        point[5].update(dict.fromkeys(m for m in row.get("trained_on", "").split(MACHINES_SEPARATOR) if m))
     out = []
-    for (method, task, epochs), (k, n, cells, stages, staged) in sorted(pooled.items()):
+    for (method, task, epochs), (k, n, cells, stages, staged, machines) in sorted(pooled.items()):
         low, high = wilson_interval(k, n)
         out.append({"method": method, "task": task, "epochs": epochs, "cells": cells, "successes": k,
                     "episodes": n, "success_rate": k / n if n else math.nan, "ci_low": low, "ci_high": high,
-                    "stages": _in_task_order(task, stages) if staged else {}})  # fmt: skip
+                    "stages": _in_task_order(task, stages) if staged else {},
+                    "trained_on": tuple(machines)})  # fmt: skip
     return out

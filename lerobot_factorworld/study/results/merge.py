@@ -25,6 +25,7 @@ from .rows import RESULT_COLUMNS, RESULTS_FILE, read_results, write_results
 
 CELL = ("method", "task", "n_train_envs", "seed", "widths", "condition")
 PROVENANCE_COLUMNS = ("commit", "source_hash")  # where a row was made, not what it measured
+CURVE_PROVENANCE_COLUMNS = ("trained_on",)  # the same, of a learning-curve point
 CHANGED_CONFIG = "if the config changed what it plans, --drop_unplanned=true leaves the old rows out"
 
 
@@ -84,12 +85,14 @@ def merge_curve_rows(
                     f"config ({CHANGED_CONFIG})"
                 )
             seen = by_step.get(row["step"])
-            point = {c: row[c] for c in CURVE_COLUMNS}
+            point = {c: row.get(c, "") if c in OPTIONAL_CURVE_COLUMNS else row[c] for c in CURVE_COLUMNS}
             if seen is None:
                 by_step[row["step"]] = (point, name)
                 continue
-            # a column an older curve.csv lacks (empty) is unknown there, not different
+            # a column an older curve.csv lacks (empty) is unknown there, not different; where it was made, not
+            # what it measured, is never compared (the first part's is kept)
             known = [c for c in CURVE_COLUMNS if c not in OPTIONAL_CURVE_COLUMNS or "" not in (seen[0][c], point[c])]
+            known = [c for c in known if c not in CURVE_PROVENANCE_COLUMNS]
             differ = [c for c in known if not _same({c: seen[0][c]}, {c: point[c]})]
             if differ:
                 raise ValueError(
