@@ -494,10 +494,13 @@ def cmd_pack(args: list[str]) -> None:
     print(f"packed {packed.files} file(s), {packed.size / 1e6:.1f} MB, into {packed.folder}")
     for rel in packed.trainings:
         print(f"  training in progress, carried with its newest save: {rel}")
-    if packed.linked:
-        print(f"  left out {len(packed.linked)} step(s) linked from other studies (reuse_from): pack those studies")
+    for rel in packed.linked:
+        print(f"  left out, linked from another study (reuse_from; pack that study): {rel}")
     if packed.unfinished:
-        print(f"  left out {len(packed.unfinished)} unfinished step(s): they start over where the study runs next")
+        print(
+            f"  left out {len(packed.unfinished)} unfinished step(s): they start over where the study runs next "
+            "(an episodes: auto group from its finished blocks, which are carried)"
+        )
     print(
         f"go on elsewhere: factorworld unpack --pack={packed.folder} --study={cfg.study}, then the same study command"
     )

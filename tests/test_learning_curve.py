@@ -136,12 +136,18 @@ def test_the_curve_says_which_machines_trained_each_checkpoint(tmp_path):
     assert machines_text(runs, 100) == "AMD EPYC; avx2; 2 CPUs"
     assert machines_text(runs, 300) == "AMD EPYC; avx2; 2 CPUs | Intel Xeon; amx_bf16, avx2; 2 CPUs"
     assert machines_text([], 300) == ""
-    rows = [{"method": "a", "task": "t", "epochs": e, "successes": 1, "episodes": 4, "stages": "",
-             "trained_on": machines_text(runs, at)} for e, at in ((10, 100), (20, 300))]  # fmt: skip
+    rows = [{"method": "a", "task": "t", "n_train_envs": 1, "seed": 0, "epochs": e, "successes": 1, "episodes": 4,
+             "stages": "", "trained_on": machines_text(runs, at)} for e, at in ((10, 100), (20, 300))]  # fmt: skip
     text = "\n".join(curve_section(rows, plotted=False, methods=["a"]))
     assert "### Which machines trained the curve" in text
-    assert "| a | t | 10 | AMD EPYC; avx2; 2 CPUs |" in text
-    assert "| a | t | 20 | AMD EPYC; avx2; 2 CPUs; then Intel Xeon; amx_bf16, avx2; 2 CPUs |" in text
+    assert "| a | t | 1 | 0 | 10 | AMD EPYC; avx2; 2 CPUs |" in text
+    assert "| a | t | 1 | 0 | 20 | AMD EPYC; avx2; 2 CPUs; then Intel Xeon; amx_bf16, avx2; 2 CPUs |" in text
+    # two cells each trained on one machine, another each (a study run in parts): a row per cell, none of two machines
+    parts = [
+        {**rows[0], "seed": seed, "trained_on": machines_text(runs[i : i + 1], 300)} for seed, i in ((0, 0), (1, 1))
+    ]
+    text = "\n".join(curve_section(parts, plotted=False, methods=["a"]))
+    assert "| a | t | 1 | 1 | 10 | Intel Xeon; amx_bf16, avx2; 2 CPUs |" in text and "; then" not in text
     one = "\n".join(curve_section(rows[:1], plotted=False, methods=["a"]))
     assert "One machine trained every checkpoint: AMD EPYC; avx2; 2 CPUs." in one
     assert "### Which machines" not in "\n".join(curve_section([{**rows[0], "trained_on": ""}], False, ["a"]))

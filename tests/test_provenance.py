@@ -20,11 +20,12 @@ from lerobot_factorworld.core.settings import parse_config
 from lerobot_factorworld.study import runner
 from lerobot_factorworld.study.plan import stale
 from lerobot_factorworld.study.plan.command import StudyCommand
-from lerobot_factorworld.study.plan.config import RUN_CONFIG_FILE, StudyConfig
+from lerobot_factorworld.study.plan.config import StudyConfig
 from lerobot_factorworld.study.plan.grid import Plan, make_plan
 from lerobot_factorworld.study.results.rows import RESULT_COLUMNS, Evaluation, commits_of, csv_text, result_rows
 from lerobot_factorworld.study.run import steps
 from lerobot_factorworld.study.run.executors import InlineExecutor
+from lerobot_factorworld.study.run.step import RUN_CONFIG_FILE
 
 GIT = shutil.which("git")
 OTHER = "826fe542cafcf25ef4dd4d5f7e92595c9abe6388"  # a commit that is not this checkout's code

@@ -97,6 +97,9 @@ def test_ten_epochs_continued_to_twenty_give_the_checkpoint_files_of_twenty_from
     # 51 frames in batches of 8: a pass is 7 steps; 10 epochs are 64 steps, so it continues from 63
     assert (result["steps"], result["resumed_from"], result["extends"]) == (128, 63, short.key)
     assert result["curve"] == {"15": 96}  # its own points; 5 and 10 epochs are the shorter training's
+    # its runs: the shorter training's (from 0), then its own from 63, on one machine and one dataset
+    assert [run["from_step"] for run in result["trained_on"]] == [0, 63]
+    assert len({json.dumps(run["machine"]) + run["dataset"] for run in result["trained_on"]}) == 1
     checkpoints = {
         step: long.folder(grown.grid().out_dir) / "train" / "checkpoints" / f"{step:06d}" for step in (64, 96, 128)
     }
@@ -115,6 +118,7 @@ def test_ten_epochs_continued_to_twenty_give_the_checkpoint_files_of_twenty_from
     # the curve reads each point's gradient step from the training that saved it (10 epochs: the shorter one's last)
     rows = curve_rows(grown.grid(), make_plan(grown.grid()), grown.grid().out_dir)
     assert [(r["epochs"], r["steps"]) for r in rows] == [(5, 32), (10, 64), (15, 96), (20, 128)]
+    assert len({r["trained_on"] for r in rows}) == 1 and rows[0]["trained_on"].endswith("CPUs")
 
 
 def test_a_chained_curve_s_point_at_a_link_s_end_is_that_link_s_last_step(tmp_path):

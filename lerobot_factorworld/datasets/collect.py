@@ -51,6 +51,7 @@ from ..scene.cameras import DEFAULT_CAMERAS_SETTING, DEFAULT_IMAGE_SIZE, check_c
 from ..tasks import check_tasks
 from .card import write_card
 from .hub import check_push_settings, push_dataset
+from .merge import write_stats_in_feature_order
 from .schema import ENV_ID_COLUMN, SPLIT_COLUMN, encode_episode, encode_factors, frame_features
 from .version import DATA_VERSION, DATA_VERSION_KEY, data_version, describe_data_version
 
@@ -540,19 +541,6 @@ def _merge(cfg: CollectConfig, root: Path, parts: Path, jobs: list[Job], results
     meta = LeRobotDatasetMetadata(cfg.repo_id, root=root)
     write_card(meta)
     return meta.total_episodes, meta.total_frames
-
-
-def write_stats_in_feature_order(root: Path) -> None:
-    """Rewrite ``meta/stats.json`` with its features in ``info.json``'s order. LeRobot 0.6.1 aggregates the stats
-    over a set of feature names, so their order in the file follows Python's per-process string hashing: two
-    collections of the same demos would differ in that file's bytes (never in its numbers), and so would the
-    dataset's content hash that a training's record of its runs compares (``study/run/steps.py``)."""
-    path = root / "meta" / "stats.json"
-    stats = json.loads(path.read_text(encoding="utf-8"))
-    features = json.loads((root / "meta" / "info.json").read_text(encoding="utf-8"))["features"]
-    order = [name for name in features if name in stats] + sorted(name for name in stats if name not in features)
-    # LeRobot's own format (lerobot.utils.io_utils.write_json), so a reader sees no other change
-    atomic_write_text(path, json.dumps({name: stats[name] for name in order}, indent=4, ensure_ascii=False))
 
 
 def _read_sidecar(root: Path) -> dict | None:

@@ -7,8 +7,11 @@ The sources are left untouched. The merge is written to a temporary folder next 
 
 from __future__ import annotations
 
+import json
 import shutil
 from pathlib import Path
+
+from ..core.io import atomic_write_text
 
 TMP_SUFFIX = ".tmp"
 
@@ -42,5 +45,20 @@ def merge_datasets(sources: list[tuple[str, Path]], repo_id: str, root: Path) ->
         tmp = root.with_name(root.name + TMP_SUFFIX)
         shutil.rmtree(tmp, ignore_errors=True)  # an interrupted merge
         aggregate_datasets([rid for rid, _ in sources], repo_id, roots=[src for _, src in sources], aggr_root=tmp)
+        write_stats_in_feature_order(tmp)
         tmp.rename(root)
     return int(LeRobotDatasetMetadata(repo_id, root=root).total_frames)
+
+
+def write_stats_in_feature_order(root: Path) -> None:
+    """Rewrite ``meta/stats.json`` with its features in ``info.json``'s order. LeRobot 0.6.1 aggregates the stats
+    over a set of feature names, so their order in the file follows Python's per-process string hashing: two
+    collections of the same demos would differ in that file's bytes (never in its numbers), and so would the
+    dataset's content hash that a training's record of its runs compares (``study/run/steps.py``). Every dataset
+    this package aggregates (a collection's shards, a training's merged data) goes through it."""
+    path = root / "meta" / "stats.json"
+    stats = json.loads(path.read_text(encoding="utf-8"))
+    features = json.loads((root / "meta" / "info.json").read_text(encoding="utf-8"))["features"]
+    order = [name for name in features if name in stats] + sorted(name for name in stats if name not in features)
+    # LeRobot's own format (lerobot.utils.io_utils.write_json), so a reader sees no other change
+    atomic_write_text(path, json.dumps({name: stats[name] for name in order}, indent=4, ensure_ascii=False))

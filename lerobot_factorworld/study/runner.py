@@ -22,7 +22,7 @@ from tqdm import tqdm
 
 from ..core.io import atomic_write_json
 from ..datasets.hub import check_hub_token
-from .plan.config import RUN_CONFIG_FILE, StudyConfig, write_run_config
+from .plan.config import StudyConfig, write_run_config
 from .plan.cost import describe, fit_cost_model
 from .plan.grid import Plan, make_plan
 from .plan.profile import profile_text, record_run
@@ -35,6 +35,7 @@ from .run.checkpoint import check_checkpoints, fetch_checkpoints
 from .run.executors import make_executor, task_units
 from .run.options import RunOptions
 from .run.reuse import check_reuse_from, link_reused_steps
+from .run.step import RUN_CONFIG_FILE
 from .run.steps import KINDS, Step, is_done
 
 LOCK_FILE = ".lock"

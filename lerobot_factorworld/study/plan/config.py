@@ -563,9 +563,6 @@ class EvalSettings:
         return StopRule(self.block or self.n_test_envs, self.max_episodes, self.tolerance, self.confidence)
 
 
-RUN_CONFIG_FILE = "config.json"  # the settings a study ran with, written into its folder by every run
-
-
 def write_run_config(path: str | Path, settings: dict[str, Any]) -> None:
     """A study's settings as JSON (which YAML reads too) in the one format its folder and docs/results/ use."""
     atomic_write_json(path, settings, indent=1, sort_keys=True, default=str)

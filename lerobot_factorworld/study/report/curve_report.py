@@ -11,7 +11,7 @@ from pathlib import Path
 from typing import Any
 
 from ..metrics import newcombe_independent
-from ..results.curve import CURVE_FILE, pooled_curve
+from ..results.curve import CURVE_FILE, MACHINES_SEPARATOR, pooled_curve
 from .markdown import ci, stage_row
 from .plots import draw_intervals, pyplot, save_figure
 
@@ -53,30 +53,30 @@ def curve_section(rows: Sequence[dict[str, Any]], plotted: bool, methods: Sequen
     lines += ["", "Each cell: P_T [95% interval] (episodes)."]
     if plotted:
         lines += ["", f"![learning curve]({CURVE_PLOT})", "", f"*{CURVE_CAPTION}*"]
-    return [*lines, *_differences(by_line, epochs, methods), *_stages(by_line), *_machines(by_line), ""]
+    return [*lines, *_differences(by_line, epochs, methods), *_stages(by_line), *_machines(rows), ""]
 
 
-def _machines(by_line: dict[tuple[str, str], dict[float, dict]]) -> list[str]:
-    """Which machines trained the curve's checkpoints (``trained_on``): one sentence when one machine trained them
-    all, else a row per checkpoint, since a training resumed on another CPU differs in its last bits from one that
-    ran on one (docs/study.md, "Across machines"); nothing for a curve.csv that does not say."""
-    points = [(line, epochs, p["trained_on"]) for line, ps in by_line.items() for epochs, p in sorted(ps.items())]
-    if not any(machines for *_, machines in points):
+def _machines(rows: Sequence[dict[str, Any]]) -> list[str]:
+    """Which machines trained each cell's checkpoints (``trained_on``), per cell, not pooled: cells of a study run in
+    parts may have trained on other machines without any training having moved. One sentence when one machine
+    trained them all, else a row per checkpoint; nothing for a curve.csv that does not say."""
+    machines = [tuple(m for m in row.get("trained_on", "").split(MACHINES_SEPARATOR) if m) for row in rows]
+    if not any(machines):
         return []
     lines = ["", "### Which machines trained the curve", ""]
-    every = {machines for *_, machines in points}
-    if len(every) == 1 and len(next(iter(every))) == 1:
-        return [*lines, f"One machine trained every checkpoint: {next(iter(every))[0]}."]
+    if len(set(machines)) == 1 and len(machines[0]) == 1:
+        return [*lines, f"One machine trained every checkpoint: {machines[0][0]}."]
     lines += [
-        "A checkpoint trained on more than one machine (a training resumed elsewhere, `factorworld unpack`) is not "
-        "byte for byte the one a single machine would make where their kernels differ (docs/study.md, *Across "
-        "machines*); the machines in the order they trained it, from each training's `trained_on`:",
+        "A training resumed on another machine (`factorworld unpack`) is not byte for byte what one machine would "
+        "make where their kernels differ (docs/study.md, *Across machines*); each cell's machines, each once, in the "
+        "order they first trained its checkpoint (its training's `trained_on`):",
         "",
-        "| method | task | epochs | trained on |",
-        "|---|---|---|---|",
+        "| method | task | N | seed | epochs | trained on |",
+        "|---|---|---|---|---|---|",
     ]
-    for (method, task), epochs, machines in points:
-        lines.append(f"| {method} | {task} | {epochs:g} | {'; then '.join(machines) or 'not recorded'} |")
+    for row, names in zip(rows, machines, strict=True):
+        cell = " | ".join(str(row.get(c, "")) for c in ("method", "task", "n_train_envs", "seed"))
+        lines.append(f"| {cell} | {row['epochs']:g} | {'; then '.join(names) or 'not recorded'} |")
     return lines
 
 

@@ -25,7 +25,7 @@ from ...core.io import atomic_write_text
 from ...core.settings import parse_config
 from ...families import family_of
 from ..plan.command import StudyCommand
-from ..plan.config import RUN_CONFIG_FILE, StudyConfig, write_run_config
+from ..plan.config import StudyConfig, write_run_config
 from ..plan.grid import Plan, make_plan
 from ..plan.profile import profile_markdown
 from ..results.curve import CURVE_FILE, curve_rows, read_curve, write_curve
@@ -33,6 +33,7 @@ from ..results.episodes import EPISODES_FILE, episode_rows, write_episodes
 from ..results.eval_results import write_eval_results
 from ..results.rows import RESULTS_FILE, finished_evaluations, read_results, result_rows, write_results
 from ..run.recording import VIDEOS_DIR
+from ..run.step import RUN_CONFIG_FILE
 from ..run.steps import STEPS_DIR
 from ..sequential import INTERVAL_LABEL
 from .curve_report import CURVE_PLOT, curve_section, plot_curve

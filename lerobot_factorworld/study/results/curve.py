@@ -128,9 +128,8 @@ def pooled_curve(rows: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
     """Per (method, task, epochs): the episodes and successes summed over N, seeds and widths, with the Wilson
     95% interval of the pooled rate (episodes of one checkpoint are independent given it; seeds add variance
     this interval does not hold, so it is a lower bound on the spread between seeds), and the episodes per
-    furthest stage summed the same way (``{}`` where a row has no stage counts), and the machines that trained
-    its checkpoints (``trained_on``, each once)."""
-    pooled: dict[tuple, list] = defaultdict(lambda: [0, 0, 0, Counter(), True, {}])
+    furthest stage summed the same way (``{}`` where a row has no stage counts)."""
+    pooled: dict[tuple, list] = defaultdict(lambda: [0, 0, 0, Counter(), True])
     for row in rows:
         point = pooled[(row["method"], row["task"], float(row["epochs"]))]
         point[0] += row["successes"]
@@ -139,12 +138,10 @@ def pooled_curve(rows: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
         stages = parse_stage_counts(row.get("stages", ""))
         point[3].update(stages)
         point[4] = point[4] and bool(stages)
-        point[5].update(dict.fromkeys(m for m in row.get("trained_on", "").split(MACHINES_SEPARATOR) if m))
     out = []
-    for (method, task, epochs), (k, n, cells, stages, staged, machines) in sorted(pooled.items()):
+    for (method, task, epochs), (k, n, cells, stages, staged) in sorted(pooled.items()):
         low, high = wilson_interval(k, n)
         out.append({"method": method, "task": task, "epochs": epochs, "cells": cells, "successes": k,
                     "episodes": n, "success_rate": k / n if n else math.nan, "ci_low": low, "ci_high": high,
-                    "stages": _in_task_order(task, stages) if staged else {},
-                    "trained_on": tuple(machines)})  # fmt: skip
+                    "stages": _in_task_order(task, stages) if staged else {}})  # fmt: skip
     return out

@@ -14,9 +14,18 @@ RUN = "run"  # meta entry: how to run a step, without changing its results (not 
 STEPS_DIR = "steps"  # <study>/steps/<kind>/<key>/
 
 
+KEY_DIGITS = 16  # a step's key: this many hex digits of a SHA-256 (its folder's name)
+RUN_CONFIG_FILE = "config.json"  # the settings a study ran with, written into its folder by every run
+
+
+def is_step_key(name: str) -> bool:
+    """Whether a folder's name is a step's key (not, say, a redone step's old ``<key>.stale-<commit>`` folder)."""
+    return len(name) == KEY_DIGITS and all(c in "0123456789abcdef" for c in name)
+
+
 def short_hash(payload: dict[str, Any]) -> str:
     """16 hex digits of the SHA-256 of ``payload`` as sorted JSON: a step's key, or what an evaluation evaluates."""
-    return hashlib.sha256(json.dumps(payload, sort_keys=True).encode()).hexdigest()[:16]
+    return hashlib.sha256(json.dumps(payload, sort_keys=True).encode()).hexdigest()[:KEY_DIGITS]
 
 
 @dataclass(frozen=True)

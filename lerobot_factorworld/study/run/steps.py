@@ -70,6 +70,7 @@ MERGED_DATA_DIR = "merged_data"  # a training step's own dataset when other task
 TRAIN_DIR = "train"
 RUNS_FILE = "runs.json"  # in a training's step folder: each run of it (from which step, on which machine and dataset)
 TRAINED_ON = "trained_on"  # result entry of a training: its runs, the trainings it extends first; never in a key
+EXTENDS = "extends"  # result entry of a training that continues another: that one's key
 CHECKPOINT = "checkpoints/last/pretrained_model"
 RESULT_PATHS = ("root", "checkpoint")  # result entries that name files: stored relative to the study folder
 DISTRIBUTION = "lerobot_env_factorworld"
@@ -467,9 +468,12 @@ def _run_train(step: Step, folder: Path, deps: list[Path]) -> dict[str, Any]:
     out = folder / TRAIN_DIR
     save_freq = min(curve.values(), default=steps)  # the curve's first checkpoint; then every as many
     saves = Saves(steps, save_freq, str(out), inputs.batch_size, every_passes=step.run.get("save_every_passes", 1))
-    state = _starting_state(out, prefix, saves, curve)
+    state, continues_own = _starting_state(out, prefix, saves, curve)
     start_step = step_of(state) if state is not None else 0
-    runs = _record_run(folder, start_step, Path(data["root"])) if start_step < steps else _recorded_runs(folder)
+    if start_step < steps:
+        runs = _record_run(folder, start_step, Path(data["root"]), continues_own)
+    else:
+        runs = _recorded_runs(folder)
     cmd = [
         sys.executable,
         "-m",
@@ -511,7 +515,7 @@ def _run_train(step: Step, folder: Path, deps: list[Path]) -> dict[str, Any]:
     if start_step:  # trained from this saved step on: after a kill, or from the training it extends
         result["resumed_from"] = start_step
     if prefix is not None:
-        result["extends"] = prefix.parent.name
+        result[EXTENDS] = prefix.parent.name
     prefix_runs = read_result(prefix.parent).get(TRAINED_ON, []) if prefix is not None else []
     result[TRAINED_ON] = [run for run in prefix_runs if run["from_step"] < (runs[0]["from_step"] if runs else 0)] + runs
     return result
@@ -522,32 +526,35 @@ def _recorded_runs(folder: Path) -> list[dict[str, Any]]:
     return json.loads(path.read_text()) if path.is_file() else []
 
 
-def _record_run(folder: Path, start_step: int, dataset: Path) -> list[dict[str, Any]]:
-    """Record that the training in the step ``folder`` runs from ``start_step`` here (``runs.json``): the machine and the dataset's content
-    hash. A training resumed on another machine, or on a dataset collected again there, is then told apart from
-    one that ran in one go; a run that saved nothing before it was stopped left no mark on the weights, so a run
-    from the same step replaces it."""
-    runs = [run for run in _recorded_runs(folder) if run["from_step"] < start_step]
+def _record_run(folder: Path, start_step: int, dataset: Path, continues_own: bool) -> list[dict[str, Any]]:
+    """Record that the training in the step ``folder`` runs from ``start_step`` here (``runs.json``): the machine
+    and the dataset's content hash. A training resumed on another machine, or on a dataset collected again there,
+    is then told apart from one that ran in one go. Its earlier runs are kept only where it continues its own
+    state (not after it started over, or from the training it extends), and only those before ``start_step``: a
+    run that saved nothing before it was stopped left no mark on the weights."""
+    earlier = _recorded_runs(folder) if continues_own else []
+    runs = [run for run in earlier if run["from_step"] < start_step]
     runs.append({"from_step": start_step, "machine": machine.current(), "dataset": folder_fingerprint(dataset)})
     atomic_write_text(folder / RUNS_FILE, json.dumps(runs, indent=1, sort_keys=True))
     return runs
 
 
-def _starting_state(out: Path, prefix: Path | None, saves: Saves, curve: dict[str, int]) -> Path | None:
-    """The saved state a training continues from: its own newest (a rerun after a kill), else the newest of the
-    training it extends; ``None``: from scratch, in an emptied folder. A prefix's state that is one of this training's
-    own checkpoints (a curve point or its last at a pass's end) is copied in, as it would have saved it."""
+def _starting_state(out: Path, prefix: Path | None, saves: Saves, curve: dict[str, int]) -> tuple[Path | None, bool]:
+    """The saved state a training continues from, and whether it is its own: its own newest (a rerun after a kill),
+    else the newest of the training it extends; ``None``: from scratch, in an emptied folder. A prefix's state that
+    is one of this training's own checkpoints (a curve point or its last at a pass's end) is copied in, as it would
+    have saved it."""
     clear_partial(out)
     own = resume_point(out, saves)
     theirs = resume_point(prefix, saves) if prefix is not None else None
     if own is not None and (theirs is None or step_of(own) >= step_of(theirs)):
-        return own
+        return own, True
     if out.exists():  # nothing of its own to continue from: LeRobot refuses an existing output_dir, start over
         shutil.rmtree(out)
     if theirs is not None and (step_of(theirs) in curve.values() or step_of(theirs) == saves.steps):
         shutil.copytree(theirs, out / CHECKPOINTS_DIR / theirs.name, symlinks=True)
-        return out / CHECKPOINTS_DIR / theirs.name
-    return theirs
+        return out / CHECKPOINTS_DIR / theirs.name, False
+    return theirs, False
 
 
 def _point_last_at(out: Path, steps: int) -> Path:
