@@ -102,7 +102,7 @@ def test_every_committed_report_and_fenced_docs_table_is_what_its_results_csv_re
 
 
 def test_every_committed_row_is_a_step_today_s_code_plans_from_its_config_and_its_named_study():
-    """The keys of every committed study hold: each ``results.csv`` row's step key is planned by today's code from
+    """The keys of every committed study hold: each ``results.csv`` row's and ``curve.csv`` point's step key is planned by today's code from
     the config published beside it, and from the shipped study of the same name (``configs/study/``, which may
     have grown, e.g. F9's RT-1 arm), so a rerun by name finds those steps cached and a changed key fails here."""
     from lerobot_factorworld.core.settings import parse_config
@@ -110,6 +110,7 @@ def test_every_committed_row_is_a_step_today_s_code_plans_from_its_config_and_it
     from lerobot_factorworld.study.plan.grid import make_plan
     from lerobot_factorworld.study.plan.named import resolve_study_config, study_names
     from lerobot_factorworld.study.report.write import PUBLISHED_CONFIG, load_config
+    from lerobot_factorworld.study.results.curve import CURVE_FILE, read_curve
 
     shipped = {}
     for name in study_names():
@@ -118,10 +119,13 @@ def test_every_committed_row_is_a_step_today_s_code_plans_from_its_config_and_it
     named = 0
     for study, folder in committed_studies(ROOT / RESULTS_ROOT).items():
         rows = read_results(folder / "results.csv")
-        (name,) = {r["study"] for r in rows}
+        # a curve still training (rt1_curve_pick_160) has its points committed before any row of the grid
+        points = read_curve(folder / CURVE_FILE) if (folder / CURVE_FILE).is_file() else []
+        (name,) = {r["study"] for r in [*rows, *points]}
         for cfg in [load_config(folder / PUBLISHED_CONFIG), *shipped.get(name, [])]:
-            keys = {s.key for s in make_plan(cfg).evaluations()}
-            unplanned = [r["step"] for r in rows if r["step"] not in keys]
+            plan = make_plan(cfg)
+            keys = {s.key for s in [*plan.evaluations(), *plan.curve_points()]}
+            unplanned = [r["step"] for r in [*rows, *points] if r["step"] not in keys]
             assert not unplanned, f"{study}: {len(unplanned)} committed step(s) not in the plan of {cfg.name}"
         named += bool(shipped.get(name))
     assert named >= 20  # most committed studies have a shipped config of their name
