@@ -532,15 +532,14 @@ class UnpackConfig:
 
 def cmd_unpack(args: list[str]) -> None:
     # as in cmd_pack: the pack's module imports steps.py's dataset stack
-    from .study.run.pack import read_manifest, unpack  # noqa: PLC0415
+    from .study.run.pack import unpack  # noqa: PLC0415
 
     cfg = parse_config(UnpackConfig, args, "unpack")
-    manifest = read_manifest(cfg.pack)
     done = unpack(cfg.pack, cfg.study)
     print(
         f"unpacked into {cfg.study}: {done.written} file(s) written, {done.present} already there, {done.links} link(s)"
     )
-    for rel in manifest["in_progress"]:
+    for rel in done.in_progress:
         print(f"  a training in progress goes on from its newest save: {rel}")
     print("go on with the study's command (it collects the left-out datasets again first)")
 

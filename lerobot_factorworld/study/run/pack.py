@@ -25,7 +25,6 @@ folder already holds before it writes anything, and never replaces a file: a dif
 
 from __future__ import annotations
 
-import hashlib
 import json
 import os
 import shutil
@@ -35,6 +34,8 @@ from pathlib import Path, PurePosixPath
 from typing import Any
 
 from ...core import machine, provenance
+from ...core.fingerprint import PREFIX as FINGERPRINT_PREFIX
+from ...core.fingerprint import file_fingerprint
 from ...core.io import atomic_write_json, temporary_path
 from .blocks import BLOCKS_DIR
 from .step import RUN_CONFIG_FILE, STEPS_DIR, is_step_key
@@ -230,12 +231,13 @@ def _carried(step: Path, study: Path, kept: set[int], done: bool) -> list[tuple[
     """``(path, link target or None)`` of what a pack carries of one step folder: everything but half-written saves,
     merged data and the training state of saves not in ``kept``; of an unfinished evaluation, its finished blocks."""
     checkpoints = step / TRAIN_DIR / CHECKPOINTS_DIR
+    blocks_only = not done and not (step / TRAIN_DIR).is_dir()  # an unfinished evaluation: its finished blocks
     carried = []
     for path in sorted(step.rglob("*")):
         rel = path.relative_to(step).parts
         if rel[0] == MERGED_DATA_DIR or rel[0].startswith(f"{MERGED_DATA_DIR}."):
             continue
-        if not done and not (step / TRAIN_DIR).is_dir() and rel[0] not in (BLOCKS_DIR, INPUTS_FILE):
+        if blocks_only and rel[0] not in (BLOCKS_DIR, INPUTS_FILE):
             continue
         if path.is_symlink():
             carried.append((path, _link_target(path, study)))
@@ -259,20 +261,19 @@ def _copy(source: Path, target: Path) -> str:
 
 
 def _sha256(path: Path) -> str:
-    digest = hashlib.sha256()
-    with open(path, "rb") as f:
-        for block in iter(lambda: f.read(1 << 20), b""):
-            digest.update(block)
-    return digest.hexdigest()
+    """A file's SHA-256 in hex, as ``pack.json`` records it (the content hash every step key uses)."""
+    return file_fingerprint(path).removeprefix(FINGERPRINT_PREFIX)
 
 
 @dataclass(frozen=True)
 class Unpacked:
-    """What :func:`unpack` did: files written, files already there with the same content, links made."""
+    """What :func:`unpack` did: files written, files already there with the same content, links made, and the
+    trainings that go on."""
 
     written: int
     present: int
     links: int
+    in_progress: tuple[str, ...]  # the trainings in progress the pack carried: they go on from their newest save
 
 
 def read_manifest(pack_dir: str | Path) -> dict[str, Any]:
@@ -323,7 +324,7 @@ def unpack(pack_dir: str | Path, study_dir: str | Path) -> Unpacked:
     for name, link in links:
         (study / name).parent.mkdir(parents=True, exist_ok=True)
         os.symlink(link, study / name)
-    return Unpacked(len(write), present, len(links))
+    return Unpacked(len(write), present, len(links), tuple(manifest["in_progress"]))
 
 
 def _check_name(name: str, study: Path) -> None:
