@@ -125,6 +125,10 @@ def test_the_curve_section_gives_each_step_along_a_curve_and_each_method_against
     assert f"| a | b | t |  |  |  | {cell(against)} |" in text and against[2] < 0  # a's 12 epochs resolved below b's
     assert "| b | a |" not in text
     assert "### Differences" not in "\n".join(curve_section(rows[:1], plotted=False, methods=["a"]))
+    # the grid uses each method's full budget: the last column while no curve is short of it, else who is short
+    assert "The last column is the checkpoint" in "\n".join(curve_section(rows, False, ["b", "a"], {"a": 12, "b": 12}))
+    short = "\n".join(curve_section(rows, False, ["b", "a"], {"a": 12, "b": 16}))
+    assert "Still training: b has reached 12 of its 16 epochs" in short and "The last column" not in short
 
 
 def test_the_curve_says_which_machines_trained_each_checkpoint(tmp_path):

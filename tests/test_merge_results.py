@@ -229,3 +229,27 @@ def test_a_wrong_config_is_refused_even_when_dropping_unplanned_rows(tmp_path):
     with pytest.raises(ValueError, match="the config plans none of the 6 rows of .*: is it this study's config"):
         merge_results(folder, [], make_plan(same_name), study="learning_curve", drop_unplanned=True)
     assert (folder / "results.csv").read_bytes() == before
+
+
+def test_a_part_of_one_method_plans_its_steps_under_the_whole_study_s_keys(capsys):
+    """``--only_methods``: F9 run for RT-1 alone (another machine runs the CNN) plans a subset of the whole study's
+    steps, the same keys, so its rows merge beside the CNN's; the claims about the CNN (those that name no method
+    are the first method's) are left out; an unknown name is one line naming the study's methods, before any work."""
+    cfg = load_config(F9 / "config.yaml")
+    part = cfg.only(["rt1_small"])
+    whole, steps = make_plan(cfg), make_plan(part).steps
+    assert {s.key for s in steps} < {s.key for s in whole.steps}
+    assert {s.meta["method"] for s in steps if "method" in s.meta} == {"rt1_small"}
+    assert [s.key for s in whole.steps if s.meta.get("method") == "rt1_small"] == [
+        s.key for s in steps if s.meta.get("method") == "rt1_small"
+    ]
+    assert [c.method for c in part.claims] == ["rt1_small"] * sum(c.method == "rt1_small" for c in cfg.claims) > []
+    assert [c.method for c in cfg.only(["bc_language"]).claims] == ["bc_language"] * sum(
+        c.method is None for c in cfg.claims
+    )
+    with pytest.raises(SystemExit) as stop:
+        main(["study", f"--config={F9 / 'config.yaml'}", "--only_methods=[rt1]", "--dry-run"])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert stop.value.code == 2 and err == [
+        "error: only_methods: unknown method(s) rt1; this study's methods: bc_language, rt1_small"
+    ]

@@ -20,9 +20,13 @@ class StudyCommand(StudyConfig, RunOptions):
         StudyConfig.__post_init__(self)
         RunOptions.__post_init__(self)
         check_reuse_from(self.reuse_from, self.out_dir)
+        if self.only_methods:  # the names checked before any work
+            self.grid()
 
     def grid(self) -> StudyConfig:
-        return StudyConfig(**{f.name: getattr(self, f.name) for f in fields(StudyConfig)})
+        """The grid to run: the whole study's, or the part ``only_methods`` names."""
+        whole = StudyConfig(**{f.name: getattr(self, f.name) for f in fields(StudyConfig)})
+        return whole.only(self.only_methods) if self.only_methods else whole
 
     def options(self) -> RunOptions:
         return RunOptions(**{f.name: getattr(self, f.name) for f in fields(RunOptions)})

@@ -14,7 +14,7 @@ import logging
 import math
 import os
 import re
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
@@ -629,6 +629,20 @@ class StudyConfig:
         self.validate()
 
     # --- derived -----------------------------------------------------------------------------
+
+    def only(self, names: Sequence[str]) -> StudyConfig:
+        """This grid with only the methods ``names``: a part of the study run on its own (another machine trains
+        one method) and merged with the rest by ``factorworld merge-results``. Their steps keep the keys they have
+        in the whole grid (a key holds its own method's settings, never the list of methods); the claims about a
+        method left out go too (a claim that names none is the first method's, and a baseline is one)."""
+        known = [m.name for m in self.methods]
+        unknown = [n for n in names if n not in known]
+        if unknown or not names:
+            given = ", ".join(unknown) or "(none given)"
+            raise ValueError(f"only_methods: unknown method(s) {given}; this study's methods: {', '.join(known)}")
+        kept = [c for c in self.claims if {c.method or known[0], *([c.baseline] if c.baseline else [])} <= set(names)]
+        claims = [c if c.method else replace(c, method=known[0]) for c in kept]
+        return replace(self, methods=[m for m in self.methods if m.name in names], claims=claims)
 
     def trained_methods(self) -> list[MethodConfig]:
         """The methods the study trains (policy settings): they need the collections and trainings."""

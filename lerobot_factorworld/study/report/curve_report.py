@@ -6,7 +6,7 @@ Newcombe's interval."""
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -22,9 +22,12 @@ CURVE_CAPTION = (
 )
 
 
-def curve_section(rows: Sequence[dict[str, Any]], plotted: bool, methods: Sequence[str]) -> list[str]:
+def curve_section(
+    rows: Sequence[dict[str, Any]], plotted: bool, methods: Sequence[str], budgets: Mapping[str, float] | None = None
+) -> list[str]:
     """Markdown lines: the pooled curve as a table (one column per checkpoint), the figure under it, then its
-    differences (``methods``: the config's order, whose first method on a task is the one compared against)."""
+    differences (``methods``: the config's order, whose first method on a task is the one compared against;
+    ``budgets``: each method's ``train.epochs``, the checkpoint the grid's evaluations use)."""
     if not rows:
         return []
     pooled = pooled_curve(rows)
@@ -34,7 +37,7 @@ def curve_section(rows: Sequence[dict[str, Any]], plotted: bool, methods: Sequen
         "",
         f"P_T of each checkpoint the training saved (`train.curve_every`), pooled over N and seeds with its Wilson "
         f"95% interval (episodes of one checkpoint; the spread between seeds is not in it); per cell and seed in "
-        f"`{CURVE_FILE}`. The last column is the checkpoint the grid's evaluations use.",
+        f"`{CURVE_FILE}`. {_budget_sentence(pooled, budgets or {})}",
         "",
         "| method | task | " + " | ".join(f"{e:g} epochs" for e in epochs) + " |",
         "|---|---|" + "---|" * len(epochs),
@@ -54,6 +57,19 @@ def curve_section(rows: Sequence[dict[str, Any]], plotted: bool, methods: Sequen
     if plotted:
         lines += ["", f"![learning curve]({CURVE_PLOT})", "", f"*{CURVE_CAPTION}*"]
     return [*lines, *_differences(by_line, epochs, methods), *_stages(by_line), *_machines(rows), ""]
+
+
+def _budget_sentence(pooled: Sequence[dict[str, Any]], budgets: Mapping[str, float]) -> str:
+    """Which checkpoint the grid's evaluations use: the full budget's, which a curve still training (a chain of
+    ``train.extends`` run in parts) has not reached yet, so its last column is not it."""
+    reached = {m: max(p["epochs"] for p in pooled if p["method"] == m) for m in {p["method"] for p in pooled}}
+    short = {m: e for m, e in reached.items() if m in budgets and e < budgets[m]}
+    if not short:
+        return "The last column is the checkpoint the grid's evaluations use."
+    return "Still training: " + "; ".join(
+        f"{m} has reached {e:g} of its {budgets[m]:g} epochs, the checkpoint the grid's evaluations use"
+        for m, e in sorted(short.items())
+    ) + "."
 
 
 def _machines(rows: Sequence[dict[str, Any]]) -> list[str]:

@@ -109,7 +109,8 @@ def render_report(
     (out_dir / CURVE_PLOT).unlink(missing_ok=True)
     curve = read_curve(out_dir / CURVE_FILE) if cfg.curve_methods() and (out_dir / CURVE_FILE).is_file() else []
     plotted = bool(curve) and plot_curve(curve, out_dir / CURVE_PLOT)
-    curve_lines = curve_section(curve, plotted, [m.name for m in cfg.methods]) if curve else []
+    budgets = {m.name: cfg.train_for(m).epochs for m in cfg.curve_methods()}
+    curve_lines = curve_section(curve, plotted, [m.name for m in cfg.methods], budgets) if curve else []
 
     def family_sections(part: str) -> list[str]:
         own = curve_lines if part == FAMILY_DETAILS else []  # the learning curve, a breakdown of P_T

@@ -45,6 +45,9 @@ class RunOptions:
         reuse_from: Other studies' folders whose finished steps this study uses where the keys (the inputs)
             are the same, linked into ``steps/`` instead of run again (``study/run/reuse.py``): e.g. F3 and F5
             reuse F1's seed-0 collections, trainings and single-factor evaluations.
+        only_methods: Run (and report) only these of the study's methods, a part of the study: another machine
+            runs the others, and ``factorworld merge-results`` puts the parts together. Their steps keep their
+            keys (:meth:`..plan.config.StudyConfig.only`). Empty: every method.
     """
 
     executor: str = "local"
@@ -60,6 +63,7 @@ class RunOptions:
     hub_repo_id: str | None = None
     model_repo_id: str | None = None
     reuse_from: list[str] = field(default_factory=list)
+    only_methods: list[str] = field(default_factory=list)
 
     def __post_init__(self) -> None:
         # steps run elsewhere (a worker's folder, a Ray node): the folders as seen from where the command runs
