@@ -22,12 +22,14 @@ from lerobot_factorworld.study.plan import stale
 from lerobot_factorworld.study.plan.command import StudyCommand
 from lerobot_factorworld.study.plan.config import StudyConfig
 from lerobot_factorworld.study.plan.grid import Plan, make_plan
+from lerobot_factorworld.study.report.write import load_config
 from lerobot_factorworld.study.results.rows import RESULT_COLUMNS, Evaluation, commits_of, csv_text, result_rows
 from lerobot_factorworld.study.run import steps
 from lerobot_factorworld.study.run.executors import InlineExecutor
 from lerobot_factorworld.study.run.step import RUN_CONFIG_FILE
 
 GIT = shutil.which("git")
+DOCS_RESULTS = Path(__file__).resolve().parents[1] / "docs" / "results"
 OTHER = "826fe542cafcf25ef4dd4d5f7e92595c9abe6388"  # a commit that is not this checkout's code
 OTHER_HASH = "0" * 64
 SETTINGS = {
@@ -435,3 +437,27 @@ def test_the_machine_is_named_by_its_cpu_and_the_extensions_that_choose_torch_s_
     finally:
         monkeypatch.delenv(machine.ISA_CAP_ENV)
         machine.current.cache_clear()
+
+
+def test_a_training_at_speed_fast_on_a_cpu_that_emulates_bf16_is_warned_of_before_it_runs(
+    tmp_path, monkeypatch, capsys
+):
+    """AVX2 without AVX-512 BF16 or AMX (or a cap below them) emulates bf16, several times slower than float32: a
+    study about to train at ``speed=fast`` there says so in one line; with native bf16, on another architecture, or
+    with its trainings finished, nothing."""
+    avx2 = {"cpu": "EPYC", "isa": ["avx2", "fma"], "isa_cap": None, "cpus": 2}
+    assert machine.lacks_native_bf16(avx2)
+    assert machine.lacks_native_bf16({**avx2, "isa": ["avx512_bf16", "avx2"], "isa_cap": "AVX2"})  # capped below
+    assert not machine.lacks_native_bf16({**avx2, "isa": ["avx512_bf16", "avx512f", "avx2"]})
+    assert not machine.lacks_native_bf16({**avx2, "isa": []})  # aarch64: no x86 extensions listed
+    plan = make_plan(load_config(DOCS_RESULTS / "rt1_curve_pick_160" / "config.yaml"))  # rt1 small at speed=fast
+    monkeypatch.setattr(machine, "current", lambda: avx2)
+    runner._warn_emulated_bf16(plan, tmp_path)
+    err = capsys.readouterr().err.splitlines()
+    assert len(err) == 1 and err[0].startswith(
+        "warning: 10 training(s) at speed=fast to run on EPYC; avx2, fma; 2 CPUs"
+    )
+    assert machine.EMULATED_BF16_COST in err[0]
+    monkeypatch.setattr(machine, "current", lambda: {**avx2, "isa": ["avx512_bf16", "avx2"]})
+    runner._warn_emulated_bf16(plan, tmp_path)
+    assert capsys.readouterr().err == ""

@@ -57,3 +57,19 @@ def describe(machine: dict[str, Any]) -> str:
     """``Intel(R) Xeon(R) Processor; amx_bf16, ..., fma; 2 CPUs`` (and the cap where one was set)."""
     cap = f"; {ISA_CAP_ENV}={machine['isa_cap']}" if machine.get("isa_cap") else ""
     return f"{machine['cpu']}; {', '.join(machine['isa']) or 'no AVX2'}; {machine['cpus']} CPUs{cap}"
+
+
+BF16_ISA = ("amx_bf16", "avx512_bf16")  # the extensions with native bf16 arithmetic (oneDNN's bf16 kernels)
+
+
+EMULATED_BF16_COST = (
+    "bf16 is emulated there: speed=fast measured 0.25x (rt1 small) and 0.08x (bc) the updates per second of "
+    "speed=default on an AVX2-only CPU (docs/benchmarks/bench_policy_cpu_avx2_small.txt)"
+)
+
+
+def lacks_native_bf16(machine: dict[str, Any]) -> bool:
+    """Whether ``machine`` is an x86 CPU whose bf16 oneDNN emulates (AVX2 but neither :data:`BF16_ISA`, or a cap
+    below them; :data:`EMULATED_BF16_COST`). False where the OS lists no x86 extensions (another architecture)."""
+    capped = str(machine.get("isa_cap") or "").lower().startswith(("avx2", "sse", "avx_"))
+    return "avx2" in machine["isa"] and (capped or not set(BF16_ISA) & set(machine["isa"]))

@@ -20,6 +20,7 @@ from pathlib import Path
 
 from tqdm import tqdm
 
+from ..core import machine
 from ..core.io import atomic_write_json
 from ..datasets.hub import check_hub_token
 from .plan.config import StudyConfig, write_run_config
@@ -75,6 +76,24 @@ def inspect_study(cfg: StudyConfig, options: RunOptions) -> str:
     return fit_cost_model(cfg, plan, study_dir, options)
 
 
+def _warn_emulated_bf16(plan: Plan, study_dir: Path) -> None:
+    """One warning line, before the hours it costs, for trainings at ``speed=fast`` about to run on a CPU whose
+    bf16 is emulated; they still run as asked (``speed`` is in their keys, so another value is another training)."""
+    slow = [
+        s
+        for s in plan.of_kind("train")
+        if s.inputs.get("device") == "cpu" and s.inputs["policy"].get("speed") == "fast" and not is_done(s, study_dir)
+    ]
+    here = machine.current()
+    if slow and machine.lacks_native_bf16(here):
+        print(
+            f"warning: {len(slow)} training(s) at speed=fast to run on {machine.describe(here)}, which has no "
+            f"AVX-512 BF16 or AMX: {machine.EMULATED_BF16_COST}; speed: default in a method's policy trains "
+            "faster here, as other trainings (other keys)",
+            file=sys.stderr,
+        )
+
+
 def run_study(cfg: StudyConfig, options: RunOptions | None = None, command: str | None = None) -> StudyOutcome:
     """Run (or resume) the grid ``cfg`` as ``options`` say (default: one local worker). Cached steps made by
     other code are named on stderr first, refused under ``strict``, redone under ``rerun_stale`` (see the module
@@ -108,6 +127,7 @@ def run_study(cfg: StudyConfig, options: RunOptions | None = None, command: str 
         stale = stale_steps(plan, study_dir)  # under the lock: no other run changes them meanwhile
         check_not_stale(options, stale)  # strict: before any work
         warn_stale(options, plan, study_dir, stale)
+        _warn_emulated_bf16(plan, study_dir)
         set_aside = rerun_stale(plan, study_dir, stale) if options.rerun_stale else []
         write_run_config(study_dir / RUN_CONFIG_FILE, {**asdict(cfg), **asdict(options)})  # as a YAML holds them
         atomic_write_json(

@@ -66,10 +66,14 @@ def _budget_sentence(pooled: Sequence[dict[str, Any]], budgets: Mapping[str, flo
     short = {m: e for m, e in reached.items() if m in budgets and e < budgets[m]}
     if not short:
         return "The last column is the checkpoint the grid's evaluations use."
-    return "Still training: " + "; ".join(
-        f"{m} has reached {e:g} of its {budgets[m]:g} epochs, the checkpoint the grid's evaluations use"
-        for m, e in sorted(short.items())
-    ) + "."
+    return (
+        "Still training: "
+        + "; ".join(
+            f"{m} has reached {e:g} of its {budgets[m]:g} epochs, the checkpoint the grid's evaluations use"
+            for m, e in sorted(short.items())
+        )
+        + "."
+    )
 
 
 def _machines(rows: Sequence[dict[str, Any]]) -> list[str]:
