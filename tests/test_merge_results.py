@@ -131,16 +131,23 @@ def test_a_learning_curve_made_in_parts_merges_back_into_its_committed_bytes(tmp
         merge_curve_rows([[{**rows[0], "step": "e" * 16}]], plan, ["a"])
 
 
+def _doubled(train: dict) -> dict:
+    """A method's ``train`` with its epochs, checkpoints and the links it extends (if any) twice as far apart."""
+    doubled = {k: 2 * train[k] for k in ("epochs", "curve_every") if k in train}
+    return {**train, **doubled, **({"extends": [2 * e for e in train["extends"]]} if train.get("extends") else {})}
+
+
+def _flow(train: dict) -> str:
+    """``train: {...}`` as the config's YAML writes a method's budget on one line."""
+    value = lambda v: f"[{', '.join(f'{e:g}' for e in v)}]" if isinstance(v, list) else f"{v:g}"  # noqa: E731
+    return "train: {" + ", ".join(f"{k}: {value(v)}" for k, v in train.items()) + "}"
+
+
 def _f9_with_a_longer_rt1_budget():
     """F9's config with RT-1 trained twice its committed epochs (a checkpoint twice as far apart): RT-1's steps
     get new keys, the CNN's keep theirs. Returns the config and a map from each RT-1 cell to its new evaluation key."""
     cfg = load_config(F9 / "config.yaml")
-    methods = [
-        replace(m, train={**m.train, "epochs": 2 * m.train["epochs"], "curve_every": 2 * m.train["curve_every"]})
-        if m.name == "rt1_small"
-        else m
-        for m in cfg.methods
-    ]
+    methods = [replace(m, train=_doubled(m.train)) if m.name == "rt1_small" else m for m in cfg.methods]
     longer = replace(cfg, methods=methods)
     keys = {
         tuple(str(s.meta[c]) for c in CELL): s.key
@@ -188,11 +195,9 @@ def test_a_changed_budget_s_old_rows_are_refused_with_the_way_out_or_dropped_on_
     assert set(pq.read_table(folder / "episodes.parquet")["step"].to_pylist()) == kept  # old RT-1 episodes gone
     shutil.copytree(F9, folder, dirs_exist_ok=True)  # again, from the command line with the config's text changed
     text = (F9 / "config.yaml").read_text()
-    doubled_budget = next(m for m in longer.methods if m.name == "rt1_small").train
-    epochs, every = doubled_budget["epochs"] / 2, doubled_budget["curve_every"] / 2
-    budget = f"train: {{epochs: {epochs:g}, batch_size: 16, curve_every: {every:g}}}"
+    committed = next(m for m in load_config(F9 / "config.yaml").methods if m.name == "rt1_small").train
+    budget, doubled = _flow(committed), _flow(_doubled(committed))
     assert text.count(budget) == 1
-    doubled = f"train: {{epochs: {2 * epochs:g}, batch_size: 16, curve_every: {2 * every:g}}}"
     (tmp_path / "longer.yaml").write_text(text.replace(budget, doubled))
     main(
         [
