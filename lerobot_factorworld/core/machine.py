@@ -71,5 +71,7 @@ EMULATED_BF16_COST = (
 def lacks_native_bf16(machine: dict[str, Any]) -> bool:
     """Whether ``machine`` is an x86 CPU whose bf16 oneDNN emulates (AVX2 but neither :data:`BF16_ISA`, or a cap
     below them; :data:`EMULATED_BF16_COST`). False where the OS lists no x86 extensions (another architecture)."""
-    capped = str(machine.get("isa_cap") or "").lower().startswith(("avx2", "sse", "avx_"))
+    # oneDNN's cap names: SSE41, AVX2, ..., AVX512_CORE, AVX512_CORE_BF16, AVX512_CORE_AMX, AVX10_1_512, DEFAULT
+    cap = str(machine.get("isa_cap") or "DEFAULT").upper()
+    capped = cap != "DEFAULT" and not any(name in cap for name in ("BF16", "AMX", "AVX10"))
     return "avx2" in machine["isa"] and (capped or not set(BF16_ISA) & set(machine["isa"]))

@@ -640,8 +640,8 @@ class StudyConfig:
         if unknown or not names:
             given = ", ".join(unknown) or "(none given)"
             raise ValueError(f"only_methods: unknown method(s) {given}; this study's methods: {', '.join(known)}")
-        kept = [c for c in self.claims if {c.method or known[0], *([c.baseline] if c.baseline else [])} <= set(names)]
-        claims = [c if c.method else replace(c, method=known[0]) for c in kept]
+        owned = [c if c.method else replace(c, method=known[0]) for c in self.claims]
+        claims = [c for c in owned if c.method in names and c.baseline in (None, *names)]
         return replace(self, methods=[m for m in self.methods if m.name in names], claims=claims)
 
     def trained_methods(self) -> list[MethodConfig]:
