@@ -104,6 +104,12 @@ class LocalExecutor:
         self.pool.shutdown(wait=True, cancel_futures=True)
 
 
+# Times Ray runs a task again whose worker died (a node lost, a native crash, kill -9); never for a step's own
+# error, which run_steps returns. Safe: every step goes on from what its dead attempt left (a training from its
+# newest save, a collection from its finished episodes).
+RAY_TASK_RETRIES = 2
+
+
 class RayExecutor:
     """Ray tasks on the cluster at ``address`` (or a local Ray instance when ``None``), each asking for the
     CPUs (threads, collection workers) and GPU its step uses. A request the cluster can never grant would
@@ -134,7 +140,7 @@ class RayExecutor:
         except ValueError:
             self.shutdown()
             raise
-        self._run = ray.remote(num_cpus=1, max_retries=0)(run_steps)
+        self._run = ray.remote(num_cpus=1, max_retries=RAY_TASK_RETRIES)(run_steps)
 
     def submit(self, steps: Sequence[Step]):
         resources = step_resources(steps[0])  # a task's steps are of one kind and ask for the same

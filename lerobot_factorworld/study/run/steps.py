@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import contextlib
 import contextvars
+import faulthandler
 import functools
 import itertools
 import json
@@ -227,6 +228,7 @@ def run_steps(steps_data: list[dict[str, Any]], study_dir: str, execution: str =
     worker (local or on Ray) keeps freed memory
     (:func:`lerobot_factorworld.core.memory.keep_freed_memory`): a training's speed then does not depend on what
     the worker ran before, and its results do not change; ``per_step`` leaves glibc's malloc as it is."""
+    _report_native_crashes()
     if execution == "grouped":
         keep_freed_memory()
     out: dict[str, str | None] = {}
@@ -239,6 +241,13 @@ def run_steps(steps_data: list[dict[str, Any]], study_dir: str, execution: str =
         except Exception as err:  # noqa: BLE001 - reported per step by the runner, as a lone step's error
             out[key] = f"{type(err).__name__}: {err}"
     return out
+
+
+def _report_native_crashes() -> None:
+    """A worker killed by a native fault (MuJoCo, Mesa's rasteriser, oneDNN) leaves no Python traceback: let
+    it print every thread's Python stack to the process's own stderr (a Ray worker's ``.err`` log) first."""
+    if not faulthandler.is_enabled() and sys.__stderr__ is not None:
+        faulthandler.enable(file=sys.__stderr__, all_threads=True)
 
 
 def _run_sequential_groups(
