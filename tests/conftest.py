@@ -295,7 +295,7 @@ def factorworld_checkpoint(build_once) -> Path:
 # the order depends on these numbers: update them when a test becomes one of the longest.
 EXPECTED_SECONDS = {
     "toy_study": 90.0,  # the xdist group of tests/test_study.py's toy study (local, rerun, reuse, a part on Ray)
-    "train_resume": 125.0,  # tests/test_train_resume.py: a killed study and a lost Ray worker (two Ray starts)
+    "train_resume": 125.0,  # tests/test_train_resume.py: a killed study, a lost Ray worker (one Ray start), a pack
     "tests/test_train_extend.py::test_ten_epochs_continued_to_twenty_give_the_checkpoint_files_of_twenty_from_scratch": 32.0,
     "tests/test_lerobot_metaworld_obs.py::test_round_trip_from_lerobots_own_metaworld_data": 128.0,
     "tests/test_throughput.py::test_bench_study_quick_runs_both_executions_with_identical_results": 69.0,
