@@ -20,6 +20,8 @@ export UV_PYTHON_DOWNLOADS=never  # uv must use this interpreter, it cannot down
 # --compile-bytecode: some machines set PYTHONDONTWRITEBYTECODE, and then every process would recompile
 # torch, transformers and LeRobot from source (~10 s per import of LeRobot).
 "$PYTHON" -m uv pip install --quiet --compile-bytecode -p .venv/bin/python -e ".[dev]"
+# The editable package itself too (uv compiles site-packages only): the tests start hundreds of processes.
+.venv/bin/python -m compileall -q lerobot_factorworld
 
 # FFmpeg shared libraries let torchcodec load (otherwise every process prints a long traceback).
 if ! ldconfig -p 2>/dev/null | grep -q libavcodec; then

@@ -67,6 +67,9 @@ def test_a_wheel_in_a_fresh_environment_runs_a_study_by_name_and_lerobot_finds_t
         uv = [shutil.which("uv") or "uv"]
     env = {**os.environ, "UV_PYTHON_DOWNLOADS": "never", "MUJOCO_GL": "egl"}
     env.pop("VIRTUAL_ENV", None)
+    # a fresh venv has no bytecode: where the machine forbids writing it, each of its commands below would
+    # compile torch and LeRobot from source again (about 20 s each)
+    env.pop("PYTHONDONTWRITEBYTECODE", None)
     wheels, source = tmp_path / "wheels", tmp_path / "source"
     # built from a copy of the checkout's files (tracked or not ignored): setuptools' build/ folder in the checkout
     # keeps files deleted since, which would end up in the wheel
