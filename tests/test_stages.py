@@ -4,7 +4,8 @@ counted per ``results.csv`` row and shown by the report next to the ``train`` co
 
 The stages are checked on real rollouts: the scripted expert passes them in order and succeeds (an episode cut
 at any step ends at the stage shown there), zero actions stay at ``none``, random actions rarely get further
-than ``reached``, and a pick episode that lifts another object than the named one ends at ``wrong_object``.
+than ``reached``, and a pick episode that goes to another object than the named one ends at ``reached_other``, or
+at ``wrong_object`` once it lifts it.
 """
 
 import csv
@@ -69,7 +70,11 @@ def zeros(env, t):
 def test_each_task_kind_has_its_ordered_stages_and_a_family_may_add_its_own():
     assert st.stage_names("door-open") == st.stage_names("drawer-close") == ARTICULATED
     assert st.stage_names("pick-place") == st.stage_names("bin-picking") == OBJECT
-    assert st.stage_names("pick") == ("none", "reached", "grasped", "moved", "wrong_object", "succeeded")
+    assert st.stage_names("pick") == (
+        "none", "reached_other", "reached", "grasped", "moved", "wrong_object", "succeeded"
+    )  # fmt: skip
+    assert st.tracked_before("pick") == ("none", "reached", "grasped", "moved", "wrong_object", "succeeded")
+    assert st.tracked_before("pick-place") == st.stage_names("pick-place")
     # door-open and lever-pull measure progress with their shaped reward (their obj_to_target does not)
     assert set(st.PROGRESS) == {"door-open", "lever-pull"}
 
@@ -147,11 +152,18 @@ def test_a_pick_episode_stages_and_lifting_another_object_ends_at_wrong_object(m
         return lift_first[-1]
 
     assert tuple(stage for stage, _ in stage_path(env, act)) == ("none", "reached", "grasped", "moved", "succeeded")
-    # the same motions in the scene that names the other object lift the wrong one
+    # the same motions in the scene that names the other object reach, then lift, the wrong one
     other = make_env(task, [named[second]], cameras=(), terminate_on_success=False)
+    other.reset(seed=0)
+    path: dict[str, int] = {}
+    for t, action in enumerate(lift_first, 1):
+        path.setdefault(other.step(action)[4]["stage"], t)
+    assert tuple(path) == ("none", "reached_other", "wrong_object")
+    # cut where it reached the other object: it ends there, having lifted nothing
+    reached_at = path["reached_other"]
     replay = iter(lift_first)
-    episode = rollout(other, None, 0, act=lambda *_: next(replay), max_steps=len(lift_first))
-    assert episode.info["stage"] == "wrong_object" and not episode.success
+    episode = rollout(other, None, 0, act=lambda *_: next(replay), max_steps=reached_at)
+    assert episode.info["stage"] == "reached_other" and not episode.success
 
 
 def test_the_evaluation_records_the_stage_of_every_seeded_episode_of_a_vector_env():
@@ -207,6 +219,16 @@ def test_results_rows_count_episodes_per_stage_and_older_evaluations_leave_the_c
     assert parse_stage_counts(rows[0]["stages"]) == {"none": 1, "reached": 0, "moved": 0, "succeeded": 2}
     assert parse_stage_counts("") == {}
     assert stage_counts_text("pick-place", ["gone", "none"]) == "none:1;reached:0;grasped:0;moved:0;succeeded:0;gone:1"
+    # a stage added later reads 0 only where the evaluation tracked it; one that recorded no names did not
+    tracked = st.stage_names("pick")
+    assert stage_counts_text("pick", ["none", "succeeded"], tracked).startswith("none:1;reached_other:0;reached:0")
+    assert stage_counts_text("pick", ["none", "succeeded"]) == (
+        "none:1;reached:0;grasped:0;moved:0;wrong_object:0;succeeded:1"
+    )
+    # pooled with episodes of an older evaluation, a later stage counts as the stage it refines
+    older = st.tracked_before("pick")
+    assert st.as_tracked("pick", ["reached_other", "reached"], older) == ["none", "reached"]
+    assert stage_counts_text("pick", ["reached_other"], older) == stage_counts_text("pick", ["none"])
     with pytest.raises(ValueError, match="not 'stage:count"):
         parse_stage_counts("none=3")
 

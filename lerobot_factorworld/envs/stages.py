@@ -25,7 +25,11 @@ ever did (``none`` if none did). The tests:
   (:data:`GOAL_VALUES`: a distance to 0, a reward to 1).
 - ``succeeded``: the task's success test (``success``).
 
-A task family may define its own stages (``TaskFamily.stages``; the pick family adds ``wrong_object``).
+A task family may define its own stages (``TaskFamily.stages``; the pick family adds ``reached_other`` and
+``wrong_object``). A stage added after evaluations were recorded without it *refines* an older one (``reached_other``
+splits ``none``): an evaluation records the stages it tracked (``stage_names`` in its result), and one that
+recorded none is counted with the stages it had (:func:`tracked_before`), never with a zero for a stage it could
+not see.
 """
 
 from __future__ import annotations
@@ -56,10 +60,12 @@ PROGRESS: dict[str, str] = {
 
 @dataclass(frozen=True)
 class Stage:
-    """One stage: its name and its test on a step's info (and the episode's first step's, for progress)."""
+    """One stage: its name and its test on a step's info (and the episode's first step's, for progress);
+    ``refines``: the older stage it splits, for a stage added after evaluations were recorded without it."""
 
     name: str
     test: Test
+    refines: str | None = None
 
 
 @dataclass(frozen=True)
@@ -71,6 +77,11 @@ class Stages:
     @property
     def names(self) -> tuple[str, ...]:
         return (NONE, *(s.name for s in self.stages))
+
+    @property
+    def refined(self) -> dict[str, str]:
+        """``{stage added later: the older stage it splits}``."""
+        return {s.name: s.refines for s in self.stages if s.refines is not None}
 
     def at(self, info: Info, first: Info) -> int:
         """The index (in :attr:`names`) of the furthest stage whose test holds at this step; 0: none."""
@@ -144,3 +155,17 @@ def stages_of(task: str | TaskSpec) -> Stages:
 def stage_names(task: str | TaskSpec) -> tuple[str, ...]:
     """The stage names of ``task`` in order, ``none`` first and ``succeeded`` last."""
     return stages_of(task).names
+
+
+def tracked_before(task: str | TaskSpec) -> tuple[str, ...]:
+    """The stages of ``task`` an evaluation that did not record its ``stage_names`` tracked: all but those added
+    later (a stage that refines another)."""
+    later = stages_of(task).refined
+    return tuple(name for name in stage_names(task) if name not in later)
+
+
+def as_tracked(task: str | TaskSpec, stages: list[str], tracked: tuple[str, ...]) -> list[str]:
+    """Episodes' stages as an evaluation that tracked only ``tracked`` would have recorded them: a later stage
+    it did not track counts as the stage it refines (to pool episodes recorded with and without it)."""
+    refined = {name: old for name, old in stages_of(task).refined.items() if name not in tracked}
+    return [refined.get(stage, stage) for stage in stages]

@@ -9,7 +9,8 @@ What changes from pick-place:
 - ``evaluate_state`` judges success on the named object only: its centre must stay at least
   :data:`~.catalog.LIFT_HEIGHT` above where it rested for :data:`~.catalog.HOLD_STEPS` consecutive
   steps, and lifting any other object by :data:`~.catalog.WRONG_LIFT_HEIGHT` first fails the episode
-  for good. Meta-World calls it exactly once per step, which is what the hold counter counts.
+  for good. Meta-World calls it exactly once per step, which is what the hold counter counts. Its info also
+  says whether the gripper is near another object (``near_other``, the ``reached_other`` stage).
 """
 
 from __future__ import annotations
@@ -24,7 +25,7 @@ from gymnasium.spaces import Box
 from ..envs.metaworld import adopt, adopted_class, move_hand
 from ..scene.build import TABLE_CENTER
 from ..tasks import TaskSpec
-from .catalog import HOLD_STEPS, LIFT_HEIGHT, LIFT_MARGIN, WRONG_LIFT_HEIGHT, get_object
+from .catalog import HOLD_STEPS, LIFT_HEIGHT, LIFT_MARGIN, REACH_RADIUS, WRONG_LIFT_HEIGHT, get_object
 from .layout import PickLayout, PlacedObject
 from .scene import body_name, joint_name
 
@@ -79,10 +80,16 @@ def _pick_methods(base: type) -> dict[str, Any]:
             self._pick_wrong = lifted[0] if lifted else ""
         self._pick_hold = self._pick_hold + 1 if heights[self._pick_target] >= LIFT_HEIGHT else 0
         success = not self._pick_wrong and self._pick_hold >= HOLD_STEPS
-        tcp_to_obj = float(np.linalg.norm(obs[4:7] - self.tcp_center))
+        tcp = self.tcp_center
+        tcp_to_obj = float(np.linalg.norm(obs[4:7] - tcp))
+        tcp_to_other = min(
+            (float(np.linalg.norm(self.data.body(body_name(n)).xpos - tcp)) for n in heights if n != self._pick_target),
+            default=np.inf,
+        )
         info = {
             "success": float(success),
-            "near_object": float(tcp_to_obj <= 0.03),
+            "near_object": float(tcp_to_obj <= REACH_RADIUS),
+            "near_other": float(tcp_to_other <= REACH_RADIUS),
             "grasp_success": float(heights[self._pick_target] > 0.01 and self.touching_main_object),
             "grasp_reward": 0.0,
             "in_place_reward": 0.0,

@@ -37,6 +37,9 @@ LIFT_MARGIN = 0.03
 """The lift goal (the state vector's goal slot) lies this much above the success height."""
 WRONG_LIFT_HEIGHT = 0.02
 """An other object whose centre rises this much above its rest has been lifted: the episode fails."""
+REACH_RADIUS = 0.03
+"""The gripper's centre this close to an object's has reached it (Meta-World pick-place's ``near_object``), the
+named object or, for the ``reached_other`` stage, another."""
 MAX_EPISODE_STEPS = _ROW.max_episode_steps
 """Horizon (the task row's): the scripted expert needs about 80 steps."""
 

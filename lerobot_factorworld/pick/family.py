@@ -12,7 +12,7 @@ from typing import Any
 
 import numpy as np
 
-from ..envs.stages import SUCCEEDED, Stage, Stages, kind_stages
+from ..envs.stages import NONE, REACHED, SUCCEEDED, Stage, Stages, kind_stages
 from ..families import TaskFamily
 from ..tasks import TaskSpec
 from .catalog import DEFAULT_OBJECTS, LOOKALIKE_FAMILIES, MAX_OBJECTS, MIN_OBJECTS
@@ -27,6 +27,14 @@ def lifted_another(info: dict[str, Any], first: dict[str, Any]) -> bool:
     return bool(info["wrong_object"])
 
 
+def reached_another(info: dict[str, Any], first: dict[str, Any]) -> bool:
+    return float(info["near_other"]) >= 1.0
+
+
+REACHED_OTHER = Stage("reached_other", reached_another, refines=NONE)
+"""The gripper reached another object than the named one (within ``catalog.REACH_RADIUS`` of its centre) and
+never the named one: a wrong choice that lifted nothing. It splits ``none`` (added after pick evaluations were
+recorded without it: those count it as ``none``)."""
 WRONG_OBJECT = Stage("wrong_object", lifted_another)
 """Another object than the named one was lifted first (``bridge.py``): the episode can no longer succeed. It
 ranks above every progress stage, being the episode's cause of failure, and below success, which it rules out."""
@@ -113,7 +121,7 @@ class PickFamily(TaskFamily):
         return np.array([workspace_keepout(clearance)], dtype=np.float64)
 
     def stages(self, task: TaskSpec) -> Stages:
-        return kind_stages(task).inserted(WRONG_OBJECT, before=SUCCEEDED)
+        return kind_stages(task).inserted(REACHED_OTHER, before=REACHED).inserted(WRONG_OBJECT, before=SUCCEEDED)
 
     def episode_records(
         self, configs: Sequence[Any], seeds: Sequence[int], object_pos_width: str | None = None

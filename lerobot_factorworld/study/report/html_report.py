@@ -41,7 +41,7 @@ from ..run.recording import VIDEOS_DIR
 from .claims_markdown import CLAIM_COLUMNS, COMPARISON_COLUMNS, claim_rows, comparison_rows
 from .episode_videos import MANIFEST
 from .html_page import PAGE, STYLE, VIEWER_HTML, VIEWER_JS
-from .markdown import ORDERING_COLUMNS, STAGES_NOTE, ci, ordering_rows, stage_tables
+from .markdown import ORDERING_COLUMNS, ci, ordering_rows, stage_tables, stages_note
 
 HTML_FILE = "report.html"
 PLOTLY_JS = "plotly.min.js"  # next to the page; the page loads it by this relative name
@@ -52,6 +52,7 @@ INTERVAL_CAPTION = (
 PALETTE = ("#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#9467bd", "#8c564b", "#e377c2", "#7f7f7f", "#bcbd22")
 STAGE_COLOURS = {
     "none": "#b03a2e",
+    "reached_other": "#c39bd3",
     "wrong_object": "#7d3c98",
     "reached": "#e67e22",
     "grasped": "#f4d03f",
@@ -233,8 +234,9 @@ def _stages_section(cfg: StudyConfig, rows: Sequence[dict]) -> str:
     counts = stage_counts(rows)
     if not counts:
         return _p("No evaluation of this study recorded its episodes' stages.")
-    parts = [_p(STAGES_NOTE)]
-    for number, (names, keys) in enumerate(stage_tables(cfg, counts).items()):
+    tables = stage_tables(cfg, counts)
+    parts = [_p(stages_note(name for names in tables for name in names))]
+    for number, (names, keys) in enumerate(tables.items()):
         labels = [f"{m} · {t} · N={n} · {c}" for m, t, n, c in keys]
         traces = []
         for j, name in enumerate(names):

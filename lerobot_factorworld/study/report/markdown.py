@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import math
 from collections import Counter, defaultdict
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterable, Sequence
 from pathlib import Path
 
 from ...core.provenance import UNKNOWN
@@ -738,15 +738,19 @@ def _per_task_table(cfg: StudyConfig, rows: list[dict]) -> list[str]:
     return lines
 
 
-STAGES_NOTE = (
-    "Every evaluated episode ends at the furthest stage it reached, judged from the task's own Meta-World "
-    "quantities (docs/study.md, *Where episodes fail*): object tasks none < reached < grasped < moved < "
-    "succeeded, articulated tasks none < reached < moved < succeeded (the pick family adds wrong_object: another "
-    "object lifted first). A stage counts when its own test held at some step, so an episode may skip one (the "
-    "pick-place expert slides the puck to its goal without lifting it: reached, then moved). Each row gives the "
-    "share of its episodes ending at each stage, pooled over seeds (main grid), the `train` condition first: a "
-    "gap shows as episodes ending at earlier stages."
-)
+def stages_note(names: Iterable[str] = ()) -> str:
+    """The note above the "Where episodes fail" tables; ``names``: the stages they show (the pick family's
+    ``reached_other`` is explained only in a report that has it)."""
+    other = "reached_other: the gripper went to another object and lifted nothing; " if "reached_other" in names else ""
+    return (
+        "Every evaluated episode ends at the furthest stage it reached, judged from the task's own Meta-World "
+        "quantities (docs/study.md, *Where episodes fail*): object tasks none < reached < grasped < moved < "
+        f"succeeded, articulated tasks none < reached < moved < succeeded (the pick family adds {other}wrong_object: "
+        "another object lifted first). A stage counts when its own test held at some step, so an episode may skip "
+        "one (the pick-place expert slides the puck to its goal without lifting it: reached, then moved). Each row "
+        "gives the share of its episodes ending at each stage, pooled over seeds (main grid), the `train` condition "
+        "first: a gap shows as episodes ending at earlier stages."
+    )
 
 
 def _stages_section(cfg: StudyConfig, rows: list[dict]) -> list[str]:
@@ -756,7 +760,8 @@ def _stages_section(cfg: StudyConfig, rows: list[dict]) -> list[str]:
     if not counts:
         return []
     tables = stage_tables(cfg, counts)
-    lines = ["## Where episodes fail (share of episodes by the furthest stage reached)", "", STAGES_NOTE, ""]
+    note = stages_note(name for names in tables for name in names)
+    lines = ["## Where episodes fail (share of episodes by the furthest stage reached)", "", note, ""]
     for names, table_keys in tables.items():
         lines += [
             "| method | task | N | condition | episodes | " + " | ".join(names) + " |",

@@ -98,7 +98,9 @@ def _row(cfg: StudyConfig, evaluation: Evaluation, epochs: float, saved_at: int)
         "ci_low": low,
         "ci_high": high,
         "step": evaluation.step.key,
-        "stages": stage_counts_text(meta["task"], evaluation.result.get("stages")),
+        "stages": stage_counts_text(
+            meta["task"], evaluation.result.get("stages"), evaluation.result.get("stage_names")
+        ),
     }
 
 

@@ -17,7 +17,7 @@ from typing import Any
 
 from ...core.io import atomic_write_text, read_table
 from ...core.provenance import DIRTY, SHORT, SHORT_HASH, UNKNOWN
-from ...envs.stages import stage_names
+from ...envs.stages import as_tracked, stage_names, tracked_before
 from ...protocol.conditions import TRAIN_SUITE, shifted_factors
 from ..metrics import paired_gap, wilson_interval
 from ..plan.config import RADIUS_FACTORS, StudyConfig
@@ -145,7 +145,7 @@ def _row(study: str, policy: str, evaluation: Evaluation, train: dict | None) ->
         "gap_ci_high": gap_high,
         "envs_visited": res["envs_visited"],
         "fingerprint": res["fingerprint"],
-        "stages": stage_counts_text(meta["task"], res.get("stages")),
+        "stages": stage_counts_text(meta["task"], res.get("stages"), res.get("stage_names")),
         "step": evaluation.step.key,
         **provenance_columns(res),
     }
@@ -155,19 +155,24 @@ def _gap_of(stop: Mapping[str, Any]) -> tuple[float, float, float]:
     return stop["gap"], stop["gap_low"], stop["gap_high"]
 
 
-def stage_counts_text(task: str, stages: Sequence[str] | None) -> str:
-    """The ``stages`` column: how many episodes ended at each stage, every stage of ``task`` in order (zeros
-    too, so the column reads alone), e.g. ``none:3;reached:2;moved:0;succeeded:5``; a stage the task no longer
-    defines comes last. Empty for an evaluation made before stages were recorded (``stages`` is ``None``)."""
+def stage_counts_text(task: str, stages: Sequence[str] | None, tracked: Sequence[str] | None = None) -> str:
+    """The ``stages`` column: how many episodes ended at each stage, every stage of ``task`` the evaluation tracked
+    in order (zeros too, so the column reads alone), e.g. ``none:3;reached:2;moved:0;succeeded:5``; a stage the task
+    no longer defines comes last. ``tracked``: the result's ``stage_names`` (``None``, an evaluation that did not
+    record them: the stages before any added later, :func:`~lerobot_factorworld.envs.stages.tracked_before`, so
+    no stage it could not see reads 0). Empty for an evaluation made before stages were recorded."""
     if stages is None:
         return ""
-    counts = Counter(stages)
-    return STAGE_SEPARATOR.join(f"{name}:{counts[name]}" for name in in_stage_order(task, counts))
+    names = tuple(tracked) if tracked is not None else tracked_before(task)
+    counts = Counter(as_tracked(task, list(stages), names))
+    return STAGE_SEPARATOR.join(f"{name}:{counts[name]}" for name in in_stage_order(task, [*names, *counts], names))
 
 
-def in_stage_order(task: str, names: Iterable[str]) -> list[str]:
-    """Every stage of ``task`` in its order, then any other of ``names`` (a stage the task no longer defines)."""
-    return list(dict.fromkeys([*stage_names(task), *names]))
+def in_stage_order(task: str, names: Iterable[str], tracked: Sequence[str] | None = None) -> list[str]:
+    """Every stage of ``task`` (of those in ``tracked``, where given) in its order, then any other of ``names``
+    (a stage the task no longer defines)."""
+    own = [n for n in stage_names(task) if tracked is None or n in tracked]
+    return list(dict.fromkeys([*own, *names]))
 
 
 def parse_stage_counts(text: str) -> dict[str, int]:

@@ -18,6 +18,7 @@ from pathlib import Path
 from typing import Any
 
 from ...core.io import atomic_write_text
+from ...envs.stages import as_tracked, stage_names, tracked_before
 from ...protocol.conditions import TRAIN_SUITE
 from ..sequential import StopRule, decide, running
 from .step import Step
@@ -72,6 +73,8 @@ def run_group(steps: list[Step], study_dir: Path, open_session: OpenSession, wri
     outcomes: dict[str, dict[str, list]] = {
         c: {"successes": [], "seeds": [], "stages": [], "lengths": []} for c in keys
     }
+    task = first.meta["task"]
+    tracked: dict[str, set[tuple[str, ...]]] = {c: set() for c in keys}  # the stages each condition's blocks tracked
     sessions: dict[str, Session] = {}
     ran = dict.fromkeys(keys, 0)  # episodes this run ran (not read back from a block): what its cost records
     shifted = [c for c in keys if c != TRAIN_SUITE]
@@ -94,10 +97,13 @@ def run_group(steps: list[Step], study_dir: Path, open_session: OpenSession, wri
                     "seeds": seeds,
                     "stages": [session.recorder.stages[s] for s in seeds],
                     "lengths": [session.recorder.lengths[s] for s in seeds],
+                    "stage_names": list(stage_names(task)),
                 }
                 _write_block(folders[condition], begin, block)
+            tracked[condition].add(tuple(block.get("stage_names", tracked_before(task))))  # older blocks: no names
             for name, values in block.items():
-                outcomes[condition][name].extend(values)
+                if name in outcomes[condition]:
+                    outcomes[condition][name].extend(values)
         stops = decide(outcomes[TRAIN_SUITE]["successes"], {c: outcomes[c]["successes"] for c in shifted}, rule)
         active = running(stops)
         active = [TRAIN_SUITE, *active] if active else []
@@ -108,13 +114,21 @@ def run_group(steps: list[Step], study_dir: Path, open_session: OpenSession, wri
             continue
         n = stops[condition].episodes
         own = {name: values[:n] for name, values in outcomes[condition].items()}
+        names = _pooled_stage_names(task, tracked[condition])
         with timed(condition):
             if condition not in sessions:
                 sessions[condition] = open_session(step)
-            result = sessions[condition].result(own["successes"], own["seeds"], own["stages"], own["lengths"])
+            stages = as_tracked(task, own["stages"], names)
+            result = sessions[condition].result(own["successes"], own["seeds"], stages, own["lengths"], list(names))
         result[SEQUENTIAL] = stops[condition].to_dict()
         result[EPISODES_RUN] = ran[condition]
         write(step, result)
+
+
+def _pooled_stage_names(task: str, tracked: set[tuple[str, ...]]) -> tuple[str, ...]:
+    """The stages a condition's blocks all tracked: their one set, or (blocks of older code among them) the stages
+    before any added later, which every block's episodes can be counted in."""
+    return next(iter(tracked)) if len(tracked) == 1 else tracked_before(task)
 
 
 def _step_of(by_condition: dict[str, Step], condition: str, folders: dict[str, Path]) -> Step:

@@ -41,6 +41,7 @@ from ...core.io import atomic_write_text
 from ...core.memory import keep_freed_memory
 from ...core.timing import Timings
 from ...datasets.merge import merge_datasets
+from ...envs.stages import stage_names
 from ...families import family_of
 from ...protocol.conditions import fingerprint
 from ...protocol.coverage import coverage
@@ -783,9 +784,15 @@ class EvalSession:
         return [bool(s) for s in info["per_task"][0]["metrics"]["successes"]]
 
     def result(
-        self, successes: list[bool], seeds: list[int], stages: list[str] | None = None, lengths: list[int] | None = None
+        self,
+        successes: list[bool],
+        seeds: list[int],
+        stages: list[str] | None = None,
+        lengths: list[int] | None = None,
+        tracked: list[str] | None = None,
     ) -> dict[str, Any]:
-        """The step's result for these episodes (``stages`` and ``lengths``: a block's, read back from its cache)."""
+        """The step's result for these episodes (``stages``, ``lengths`` and the stages ``tracked``: blocks', read
+        back from their cache; else this run's, which tracks the task's stages of now)."""
         with self.timings.span("records"):
             recorder, configs, folder = self.recorder, self.configs, self.folder
             cover = coverage(seeds, len(configs))
@@ -796,6 +803,7 @@ class EvalSession:
                 "successes": successes,
                 "seeds": seeds,
                 "stages": stages or of_seeds(recorder.stages, seeds),  # the furthest stage of every episode
+                "stage_names": tracked or list(stage_names(self.task)),  # the stages that were tracked
                 "lengths": lengths or of_seeds(recorder.lengths, seeds),  # steps of every episode
                 "n_envs": len(configs),
                 "envs_visited": cover.visited,
