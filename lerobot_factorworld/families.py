@@ -28,6 +28,8 @@ class TaskFamily:
         content_key: The key a configuration's content is saved under (in saved configurations, env
             ``info`` and study step results); ``""``: the family has no content.
         sampling_options: The ``SamplingOptions`` fields only this family reads.
+        keyed_when_set: Those of :attr:`sampling_options` a collection's key holds only when set (options added
+            after collections were keyed without them: their keys stay as they were).
         conditions: Evaluation conditions the family adds to the factor shifts.
         report_entry_point: Where the family's part of a study report lives (``"module:attr"``, a
             ``study.report.family_report.FamilyReport`` above the study); ``""``: the family adds nothing to reports.
@@ -36,6 +38,7 @@ class TaskFamily:
     name: ClassVar[str] = ""
     content_key: ClassVar[str] = ""
     sampling_options: ClassVar[tuple[str, ...]] = ()
+    keyed_when_set: ClassVar[tuple[str, ...]] = ()
     conditions: ClassVar[tuple[str, ...]] = ()
     report_entry_point: ClassVar[str] = ""
 

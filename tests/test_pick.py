@@ -154,6 +154,27 @@ def test_a_pick_configuration_takes_no_free_form_instruction_and_validates_its_l
         PlacedObject("pink_cube", 0.0, 0.0)
     with pytest.raises(ValueError, match="n_objects must be in \\[3, 6\\]"):
         SamplingOptions(n_objects=7)
+    held_out = catalog.split_templates("eval")[0]
+    with pytest.raises(ValueError, match=r"template must be one of the training phrasings \['"):
+        SamplingOptions(template=held_out)
+
+
+def test_a_fixed_phrasing_pins_every_episode_s_template_and_changes_nothing_else(make_env):
+    """``SamplingOptions.template``: the same scenes and, episode by episode, the same named objects, each phrased
+    with the one template; ``held_out_phrasings`` still phrases them with the held-out ones."""
+    fixed = catalog.split_templates("train")[0]
+    drawn = sample_configs(TASK, 2, seed=3)
+    pinned = sample_configs(TASK, 2, seed=3, options=SamplingOptions(template=fixed))
+    assert [c.content.objects for c in pinned] == [c.content.objects for c in drawn]
+    assert [c.factors for c in pinned] == [c.factors for c in drawn]
+    records = [
+        [make_env(TASK, cfgs, cameras=()).reset(seed=s)[1]["pick"] for s in range(6)] for cfgs in (drawn, pinned)
+    ]
+    assert [r["target"] for r in records[1]] == [r["target"] for r in records[0]]
+    assert {r["template"] for r in records[1]} == {fixed} and len({r["template"] for r in records[0]}) > 1
+    assert all(r["instruction"] == catalog.render(fixed, r["target"]) for r in records[1])
+    shifted = language_shift(pinned, "held_out_phrasings", 2, seed=4)
+    assert all(c.content.template == "" and c.content.phrasings == "eval" for c in shifted)
 
 
 def test_gymnasium_env_checker_passes_on_pick():

@@ -273,6 +273,18 @@ def test_pick_language_conditions_and_n_objects_in_a_study():
     assert make_plan(default).of_kind("collect")[0].inputs["n_objects"] == PICK_FAMILY.n_objects[1]
     assert collect.key not in _keys(default, "collect")
     assert "n_objects" not in make_plan(_cfg()).of_kind("collect")[0].inputs  # door-open: not in its key
+    # a fixed phrasing is in the key only when set: every pick collection keyed before it existed keeps its key
+    assert "template" not in collect.inputs
+    fixed = _cfg(
+        tasks=["pick"], n_train_envs=[2], factors=factors, collect={"demos": 2, "template": "pick up the {noun}"}
+    )
+    fixed_collect = make_plan(fixed).of_kind("collect")[0]
+    assert fixed_collect.inputs["template"] == "pick up the {noun}"
+    dataset = collect_config(fixed_collect.inputs, Path("/tmp/x"), fixed_collect.key)
+    assert dataset.sampling.template == "pick up the {noun}" and "template" in dataset.fingerprint()["sampling"]
+    assert "template" not in collect_config(collect.inputs, Path("/tmp/x"), collect.key).fingerprint()["sampling"]
+    with pytest.raises(ValueError, match="collect.template must be one of the training phrasings"):
+        _cfg(tasks=["pick"], n_train_envs=[2], collect={"demos": 2, "template": "take the {colour} {noun}"})
     with pytest.raises(ValueError, match="applies to the pick family only .* not to door-open"):
         _cfg(factors=["light", "held_out_objects"])
     with pytest.raises(ValueError, match="collect.n_objects applies to the pick family only"):

@@ -44,7 +44,7 @@ from ..envs.factor_env import CONTROL_FPS, FactorWorldEnv
 from ..experts import DEFAULT_ACTION_NOISE, Episode, expert_policy, rollout
 from ..factors.registry import PAPER_STUDY_FACTORS, check_factors
 from ..factors.values import SceneConfig
-from ..protocol.sampling import SamplingOptions, sample_configs
+from ..protocol.sampling import SamplingOptions, sample_configs, unset_options
 from ..protocol.sidecar import SIDECAR
 from ..scene.build import DEFAULT_QUALITY, check_quality
 from ..scene.cameras import DEFAULT_CAMERAS_SETTING, DEFAULT_IMAGE_SIZE, check_cameras
@@ -165,6 +165,8 @@ class CollectConfig:
         settings = asdict(self)
         for key in (*RUN_ONLY_SETTINGS, "root"):
             settings.pop(key)
+        for key in unset_options(self.sampling):  # an option added later, unset: recorded as before it existed
+            settings["sampling"].pop(key)
         return {**settings, DATA_VERSION_KEY: DATA_VERSION}
 
 

@@ -20,7 +20,7 @@ from .episode import PickScene
 from .expert import PickExpert
 from .layout import PickLayout, default_layout, episode_record, workspace_keepout
 from .records import episode_records
-from .sampling import CONDITIONS, check_condition, language_shift, sample_layouts
+from .sampling import CONDITIONS, check_condition, check_fixed_template, language_shift, sample_layouts
 
 
 def lifted_another(info: dict[str, Any], first: dict[str, Any]) -> bool:
@@ -45,7 +45,8 @@ class PickFamily(TaskFamily):
 
     name = "pick"
     content_key = "pick"
-    sampling_options = ("n_objects",)
+    sampling_options = ("n_objects", "template")
+    keyed_when_set = ("template",)
     conditions = CONDITIONS
     report_entry_point = "lerobot_factorworld.family_reports.pick:PICK_REPORT"
     n_objects = (MIN_OBJECTS, DEFAULT_OBJECTS, MAX_OBJECTS)
@@ -91,10 +92,11 @@ class PickFamily(TaskFamily):
         low, _, high = self.n_objects
         if not low <= options.n_objects <= high:
             raise ValueError(f"n_objects must be in [{low}, {high}], got {options.n_objects}")
+        check_fixed_template(options.template)
 
     def sample_contents(self, task: TaskSpec, n: int, seed: int, split: str, options: Any) -> list[PickLayout]:
         # The objects on the table and what episodes name: their own seeded stream.
-        return sample_layouts(n, seed, split, options.n_objects)
+        return sample_layouts(n, seed, split, options.n_objects, options.template)
 
     def lookalike_families(self, task: TaskSpec) -> tuple[str, ...]:
         return LOOKALIKE_FAMILIES

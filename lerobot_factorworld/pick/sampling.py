@@ -20,7 +20,7 @@ import numpy as np
 
 from ..core.splits import SPLITS
 from ..families import family_of
-from .catalog import SLOT_JITTER, SLOTS, get_object, split_objects
+from .catalog import SLOT_JITTER, SLOTS, get_object, split_objects, split_templates
 from .layout import PickLayout, PlacedObject, choose_objects
 
 LAYOUT_STREAM = 1_000  # beyond every factor's index in ``factor_rng``
@@ -50,8 +50,18 @@ def _yaw(rng: np.random.Generator, name: str) -> float:
     return yaw + (np.pi if flip and limit < np.pi else 0.0)
 
 
-def sample_layouts(n: int, seed: int, split: str = "train", n_objects: int = 4) -> list[PickLayout]:
-    """``n`` layouts of ``n_objects`` objects from ``split``'s objects (``eval``: held-out objects named)."""
+def check_fixed_template(template: str) -> None:
+    """A fixed phrasing (``SamplingOptions.template``) is one of the training templates: a held-out one would put
+    the ``held_out_phrasings`` condition's phrasings in the training data (the error names the valid ones)."""
+    train = split_templates("train")
+    if template and template not in train:
+        raise ValueError(f"template must be one of the training phrasings {list(train)} (or empty), got {template!r}")
+
+
+def sample_layouts(n: int, seed: int, split: str = "train", n_objects: int = 4, template: str = "") -> list[PickLayout]:
+    """``n`` layouts of ``n_objects`` objects from ``split``'s objects (``eval``: held-out objects named), every
+    episode phrased with ``template`` where one is given (else a template drawn per episode). The template is drawn
+    from no stream: a fixed phrasing leaves the scenes and targets as they are."""
     rng = layout_rng(seed, split)
     out = []
     for _ in range(n):
@@ -61,7 +71,7 @@ def sample_layouts(n: int, seed: int, split: str = "train", n_objects: int = 4) 
             names = choose_objects(rng, split_objects("eval"), split_objects("train"), n_objects)
         slots = rng.permutation(len(SLOTS))[:n_objects]
         targets = () if split == "train" else tuple(n for n in names if n in split_objects("eval"))
-        out.append(PickLayout(_poses(rng, names, slots), targets=targets))
+        out.append(PickLayout(_poses(rng, names, slots), targets=targets, template=template))
     return out
 
 

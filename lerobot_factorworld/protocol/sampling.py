@@ -69,6 +69,9 @@ class SamplingOptions:
         n_distractors: Number of distractor objects per environment.
         n_objects: Objects on the table in a scene of a family that reads it (its ``sampling_options``;
             checked by the family); other tasks ignore it.
+        template: The pick family's phrasing template every episode of the sampled scenes is phrased with (one of
+            its training templates, e.g. ``"pick up the {colour} {noun}"``: the instruction fixed to the named
+            object's colour and noun); ``""``: drawn per episode from the split's templates. Other tasks ignore it.
         asset_split: How assets are split between train and eval: ``family`` (default) holds whole
             families out, so test textures and shapes are unlike any training one (the paper's unseen
             images and objects); ``variant`` splits name by name (new variants of seen families). In a
@@ -82,6 +85,7 @@ class SamplingOptions:
     n_distractors: int = 1
     asset_split: str = DEFAULT_ASSET_SPLIT
     n_objects: int = 4
+    template: str = ""
 
     def __post_init__(self) -> None:
         check_asset_split(self.asset_split)
@@ -92,11 +96,23 @@ class SamplingOptions:
             raise ValueError(f"rgb_fraction must be in [0, 1], got {self.rgb_fraction}")
         if not 0 <= self.n_distractors <= MAX_DISTRACTORS:
             raise ValueError(f"n_distractors must be in [0, {MAX_DISTRACTORS}], got {self.n_distractors}")
-        for family in all_families():  # the options only a task family reads (pick: n_objects)
+        for family in all_families():  # the options only a task family reads (pick: n_objects, template)
             family.check_sampling(self)
         for folder in (self.texture_folder, self.shape_folder):
             if folder is not None and not Path(folder).is_dir():
                 raise FileNotFoundError(f"asset folder {folder} does not exist")
+
+
+def unset_options(options: SamplingOptions) -> tuple[str, ...]:
+    """The fields a family reads only when set (``TaskFamily.keyed_when_set``) that are at their default: a
+    dataset's record leaves them out, so data collected before they existed keeps its bytes."""
+    defaults = SamplingOptions()
+    return tuple(
+        name
+        for family in all_families()
+        for name in family.keyed_when_set
+        if getattr(options, name) == getattr(defaults, name)
+    )
 
 
 def factor_rng(seed: int, split: str, factor: str, *extra: int) -> np.random.Generator:

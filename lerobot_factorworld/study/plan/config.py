@@ -325,6 +325,9 @@ class CollectSettings:
             ``SamplingOptions.rgb_fraction``, the paper's images and colours as docs/factors.md reads it).
         n_objects: Objects on the table per scene, for the task families that read it (their
             ``sampling_options``; ``None``: the sampling default); refused for other tasks.
+        template: The pick family's fixed phrasing: every episode of the dataset (and of its evaluations in the
+            training environments) is phrased with this training template, e.g. ``"pick up the {colour} {noun}"``
+            (``None``: a template drawn per episode). In the collection's key only when set.
         quality: Render quality of the demonstrations and so of every evaluation on their environments
             (``fast``, ``lod``: simplified robot meshes, about 2x faster frames, slightly other pixels; ``full``:
             Meta-World's shadows, about 7x slower; docs/factors.md). In the collection's key when not ``fast``.
@@ -343,6 +346,7 @@ class CollectSettings:
     n_distractors: int = 1
     rgb_fraction: float | None = None
     n_objects: int | None = None
+    template: str | None = None
     quality: str = DEFAULT_QUALITY
     workers: int = 1
 
@@ -371,10 +375,11 @@ class CollectSettings:
     def family_options_for(self, task: str) -> dict[str, Any]:
         """The sampling options ``task``'s family reads (``SamplingOptions`` fields named in its
         ``sampling_options``), each as set here or the sampling default; ``{}`` for a plain task."""
-        defaults = SamplingOptions()
+        defaults, family = SamplingOptions(), family_of(task)
         return {
             name: getattr(defaults, name) if getattr(self, name) is None else getattr(self, name)
-            for name in family_of(task).sampling_options
+            for name in family.sampling_options
+            if getattr(self, name) is not None or name not in family.keyed_when_set  # keys as before it existed
         }
 
 

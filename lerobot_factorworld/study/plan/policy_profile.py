@@ -194,6 +194,7 @@ def _collect_settings(
         n_distractors=sampling.n_distractors,
         rgb_fraction=sampling.rgb_fraction,
         n_objects=sampling.n_objects if "n_objects" in family_of(task).sampling_options else None,
+        template=(sampling.template or None) if "template" in family_of(task).sampling_options else None,
         quality=quality,
     )
 
