@@ -208,3 +208,21 @@ def test_bench_collect_refuses_fewer_demos_than_environments_in_one_line():
         .splitlines()[-1]
         .endswith("--demos must be at least 2 (one per environment) and --rounds at least 1")
     )
+
+
+@pytest.mark.slow
+def test_bench_frame_cache_reads_the_same_samples_faster_and_prints_the_ratio(tiny_dataset):
+    """``scripts/bench_frame_cache.py`` on a collected dataset (``--root``; its default collects one first, as the
+    committed run did): both readers' rows, the identity check and the ratio computed from them."""
+    lines, ratio = run_script("bench_frame_cache.py", ("--root", str(tiny_dataset), "--samples", "60"), 300)
+    (header,) = [line for line in lines if line.startswith("dataset: ")]
+    assert re.fullmatch(r"dataset: 3 episodes, (\d+) frames \| window 6 \| 60 samples \| .+", header)
+    frames = header.split(", ")[1].split()[0]
+    assert f"frames decoded once: {frames} rows, " in "\n".join(lines)  # the cache held every frame
+    readers = ("as LeRobot reads it", "frame cache")
+    rates = {row[0]: (float(row[1]), float(row[2])) for row in table_rows(lines, "") if row[0] in readers}
+    assert len(rates) == 2 and "samples: identical" in lines
+    for seconds, rate in rates.values():
+        assert close(rate, 1, 60 / seconds, (seconds, 2))
+    plain, cached = rates["as LeRobot reads it"][1], rates["frame cache"][1]
+    assert close(ratio, 4, cached / plain, (plain, 1), (cached, 1))

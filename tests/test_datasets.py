@@ -400,3 +400,32 @@ def test_push_settings_are_checked_before_collecting(tmp_path, capsys, monkeypat
     assert not root.exists() and not staging_dir(root).exists()
     monkeypatch.setattr(huggingface_hub, "get_token", lambda: "hf_token")
     assert tiny(root, repo_id="someone/x", push_to_hub=True, private=True).private  # all prerequisites met
+
+
+def test_a_training_s_cached_frames_give_every_sample_value_for_value(tiny_dataset):
+    """``datasets/frame_cache.py``: with RT-1's six-frame window, every sample of the cached dataset equals the
+    dataset's own (keys, dtypes, values, padding masks, task); a dataset too large for the cache is read as before."""
+    import torch
+    from lerobot.datasets.lerobot_dataset import LeRobotDataset
+
+    from lerobot_factorworld.datasets.frame_cache import CachedRows, cache_rows, cached_frames
+
+    window = [i / 80 for i in range(-5, 1)]
+    delta = {"observation.images.front": window, "action": window}
+    plain = LeRobotDataset("local/pp", root=tiny_dataset, delta_timestamps=delta)
+    with cached_frames():
+        cached = LeRobotDataset("local/pp", root=tiny_dataset, delta_timestamps=delta)
+    assert isinstance(cached.reader.hf_dataset, CachedRows) and not isinstance(plain.reader.hf_dataset, CachedRows)
+    for i in range(len(plain)):
+        mine, theirs = cached[i], plain[i]
+        assert list(mine) == list(theirs)
+        for key, value in theirs.items():
+            if isinstance(value, torch.Tensor):
+                assert mine[key].dtype == value.dtype and torch.equal(mine[key], value), (i, key)
+            else:
+                assert mine[key] == value, (i, key)
+    mine["observation.images.front"] += 1  # a sample is the caller's: the cache keeps its own
+    assert torch.equal(
+        cached[len(plain) - 1]["observation.images.front"], plain[len(plain) - 1]["observation.images.front"]
+    )
+    assert cache_rows(plain.reader.hf_dataset, ["observation.images.front"], max_bytes=1000) is None

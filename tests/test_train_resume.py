@@ -115,7 +115,8 @@ def test_a_study_killed_mid_training_resumes_and_ends_with_the_uninterrupted_che
     subprocess.run(_study(config), check=True, capture_output=True, timeout=600)
     result = json.loads((_train_folder(study) / "result.json").read_text())
     assert result["resumed_from"] > 0 and result["resumed_from"] % PASS_STEPS == 0, why
-    assert "Resuming data order at epoch" in (_train_folder(study) / "log.txt").read_text()
+    log = (_train_folder(study) / "log.txt").read_text()
+    assert "Resuming data order at epoch" in log and "frames decoded once: 51 rows" in log  # the frame cache served it
     _same_checkpoints(study, uninterrupted, why)
     # the saves only a rerun needed are gone: the curve-less training keeps its last and the newest pass's end
     assert _saved(study) == [STEPS // PASS_STEPS * PASS_STEPS, STEPS], why

@@ -40,6 +40,7 @@ from ...core.fingerprint import folder_fingerprint
 from ...core.io import atomic_write_text
 from ...core.memory import keep_freed_memory
 from ...core.timing import Timings
+from ...datasets.frame_cache import cached_frames
 from ...datasets.merge import merge_datasets
 from ...envs.stages import stage_names
 from ...families import family_of
@@ -623,14 +624,19 @@ def _train_subprocess(cmd: list[str], folder: Path, threads: int, saves: Saves) 
 
 def _train_in_process(args: list[str], folder: Path, threads: int, timings: Timings, saves: Saves) -> None:
     """``lerobot-train`` with ``args`` in this (persistent worker) process, saving as ``saves`` say: no interpreter
-    start and no imports per run, and a checkpoint byte-identical to the subprocess's (``scripts/bench_study.py``
-    checks)."""
+    start and no imports per run, PNG frames decoded once (``datasets/frame_cache.py``: the loader then needs a
+    fraction of a core), and a checkpoint byte-identical to the subprocess's (``scripts/bench_study.py`` checks)."""
     with timings.span("imports"):
         from lerobot.scripts import lerobot_train  # noqa: PLC0415 - LeRobot's training stack (seconds, once)
 
     print("lerobot-train (in process) " + " ".join(args), flush=True)
     try:
-        with as_lerobot_process("lerobot-train", args, folder, threads), saving(saves), warnings.catch_warnings():
+        with (
+            as_lerobot_process("lerobot-train", args, folder, threads),
+            saving(saves),
+            cached_frames(),
+            warnings.catch_warnings(),
+        ):
             # A lent loader (loader_args) forks this worker, whose renderer and arrow threads sit idle meanwhile:
             # its children only read PNG frames from parquet, so Python's warning about forking with threads is
             # noise here.
