@@ -175,9 +175,8 @@ def test_the_shipped_configs_parse(tmp_path):
     ("args", "expected"),
     [
         (["collect", "--bogus=1"], "unknown setting(s) --bogus"),
-        # each a new process importing the command (seconds): the rest of the suite runs them in process
-        pytest.param(["collect", "--n_envs=abc"], "bad value for --n_envs", marks=pytest.mark.slow),
-        pytest.param(["collect", "--config_path=configs/missing.yaml"], "does not exist", marks=pytest.mark.slow),
+        # each a new process importing the command (seconds): a refusal while parsing (above) and one raised by a
+        # setting's own check (below); the other refusals run in process (the tables above)
         pytest.param(
             ["collect", "--sampling.texture_folder=/nonexistent/textures"], "does not exist", marks=pytest.mark.slow
         ),
