@@ -31,6 +31,8 @@ class TaskFamily:
         keyed_when_set: Those of :attr:`sampling_options` a collection's key holds only when set (options added
             after collections were keyed without them: their keys stay as they were).
         conditions: Evaluation conditions the family adds to the factor shifts.
+        episode_measures: Keys of the env's ``info`` whose values at an episode's last step an evaluation records
+            for every episode (``measures`` in its result), beside its stage.
         report_entry_point: Where the family's part of a study report lives (``"module:attr"``, a
             ``study.report.family_report.FamilyReport`` above the study); ``""``: the family adds nothing to reports.
     """
@@ -40,6 +42,7 @@ class TaskFamily:
     sampling_options: ClassVar[tuple[str, ...]] = ()
     keyed_when_set: ClassVar[tuple[str, ...]] = ()
     conditions: ClassVar[tuple[str, ...]] = ()
+    episode_measures: ClassVar[tuple[str, ...]] = ()
     report_entry_point: ClassVar[str] = ""
 
     # --- content: what a configuration of this family holds besides its factors ----------------------

@@ -22,6 +22,7 @@ from lerobot_factorworld.envs import stages as st
 from lerobot_factorworld.envs.factor_env import FactorWorldEnv
 from lerobot_factorworld.experts import expert_action, expert_policy, rollout
 from lerobot_factorworld.pick import catalog
+from lerobot_factorworld.pick.family import PICK_FAMILY
 from lerobot_factorworld.protocol.sampling import sample_configs
 from lerobot_factorworld.study.report.markdown import REPORT_FILE
 from lerobot_factorworld.study.report.write import regenerate_report
@@ -162,8 +163,15 @@ def test_a_pick_episode_stages_and_lifting_another_object_ends_at_wrong_object(m
     # cut where it reached the other object: it ends there, having lifted nothing
     reached_at = path["reached_other"]
     replay = iter(lift_first)
-    episode = rollout(other, None, 0, act=lambda *_: next(replay), max_steps=reached_at)
+    recorder = EpisodeRecorder(measure_keys=PICK_FAMILY.episode_measures)
+    cut = make_env(task, [named[second]], cameras=(), terminate_on_success=False, max_episode_steps=reached_at)
+    cut.unwrapped.episode_observer = recorder  # keeps what an episode ended with: this one is cut at reached_at
+    episode = rollout(cut, None, 0, act=lambda *_: next(replay))
     assert episode.info["stage"] == "reached_other" and not episode.success
+    # what an evaluation keeps of it: the gripper came within 3 cm of another object, never of the named one
+    (measures,) = recorder.measures.values()
+    assert measures["closest_other"] <= catalog.REACH_RADIUS < measures["closest_named"]
+    assert measures == {k: round(float(episode.info[k]), 6) for k in ("closest_named", "closest_other")}
 
 
 def test_the_evaluation_records_the_stage_of_every_seeded_episode_of_a_vector_env():

@@ -180,6 +180,7 @@ class FactorWorldEnv(gym.Env):
         terminated = success and self.terminate_on_success
         truncated = self._steps >= self._max_episode_steps
         info = self._info(success, float(mw_reward), stage)
+        info.update((key, mw_info[key]) for key in self._family.episode_measures)  # e.g. pick: how close it came
         if self.episode_observer is not None:
             self.episode_observer.on_step(self, obs, terminated, truncated, info)
         return obs, float(success), terminated, truncated, info

@@ -10,7 +10,9 @@ What changes from pick-place:
   :data:`~.catalog.LIFT_HEIGHT` above where it rested for :data:`~.catalog.HOLD_STEPS` consecutive
   steps, and lifting any other object by :data:`~.catalog.WRONG_LIFT_HEIGHT` first fails the episode
   for good. Meta-World calls it exactly once per step, which is what the hold counter counts. Its info also
-  says whether the gripper is near another object (``near_other``, the ``reached_other`` stage).
+  says whether the gripper is near another object (``near_other``, the ``reached_other`` stage) and how close its
+  centre has come so far to the named object's centre and to the nearest other one's (``closest_named``,
+  ``closest_other``: what an evaluation records of every episode, ``PickFamily.episode_measures``).
 """
 
 from __future__ import annotations
@@ -69,6 +71,7 @@ def _pick_methods(base: type) -> dict[str, Any]:
         self.init_left_pad = self.get_body_com("leftpad")
         self.init_right_pad = self.get_body_com("rightpad")
         self._pick_hold, self._pick_wrong = 0, ""
+        self._pick_closest = dict.fromkeys(self._pick_rest, np.inf)  # each object's closest gripper distance so far
         return self._get_obs()
 
     def evaluate_state(self, obs: np.ndarray, action: np.ndarray) -> tuple[float, dict[str, Any]]:
@@ -82,10 +85,11 @@ def _pick_methods(base: type) -> dict[str, Any]:
         success = not self._pick_wrong and self._pick_hold >= HOLD_STEPS
         tcp = self.tcp_center
         tcp_to_obj = float(np.linalg.norm(obs[4:7] - tcp))
-        tcp_to_other = min(
-            (float(np.linalg.norm(self.data.body(body_name(n)).xpos - tcp)) for n in heights if n != self._pick_target),
-            default=np.inf,
-        )
+        distances = {n: float(np.linalg.norm(self.data.body(body_name(n)).xpos - tcp)) for n in heights}
+        tcp_to_other = min((d for n, d in distances.items() if n != self._pick_target), default=np.inf)
+        closest = self._pick_closest
+        for name, distance in distances.items():
+            closest[name] = min(closest[name], distance)
         info = {
             "success": float(success),
             "near_object": float(tcp_to_obj <= REACH_RADIUS),
@@ -97,6 +101,8 @@ def _pick_methods(base: type) -> dict[str, Any]:
             "unscaled_reward": float(success),
             "target_height": heights[self._pick_target],
             "wrong_object": self._pick_wrong,
+            "closest_named": closest[self._pick_target],  # the gripper's closest approach so far (centres, metres)
+            "closest_other": min((d for n, d in closest.items() if n != self._pick_target), default=np.inf),
         }
         return float(success), info
 

@@ -48,6 +48,7 @@ class PickFamily(TaskFamily):
     sampling_options = ("n_objects", "template")
     keyed_when_set = ("template",)
     conditions = CONDITIONS
+    episode_measures = ("closest_named", "closest_other")  # how close the gripper came, to tell choice from reach
     report_entry_point = "lerobot_factorworld.family_reports.pick:PICK_REPORT"
     n_objects = (MIN_OBJECTS, DEFAULT_OBJECTS, MAX_OBJECTS)
     """Objects per pick scene: fewest, default, most (``--sampling.n_objects``)."""

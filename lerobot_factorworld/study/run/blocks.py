@@ -75,6 +75,7 @@ def run_group(steps: list[Step], study_dir: Path, open_session: OpenSession, wri
     }
     task = first.meta["task"]
     tracked: dict[str, set[tuple[str, ...]]] = {c: set() for c in keys}  # the stages each condition's blocks tracked
+    measured: dict[str, list] = {c: [] for c in keys}  # each episode's family measures (None: a block without them)
     sessions: dict[str, Session] = {}
     ran = dict.fromkeys(keys, 0)  # episodes this run ran (not read back from a block): what its cost records
     shifted = [c for c in keys if c != TRAIN_SUITE]
@@ -99,11 +100,14 @@ def run_group(steps: list[Step], study_dir: Path, open_session: OpenSession, wri
                     "lengths": [session.recorder.lengths[s] for s in seeds],
                     "stage_names": list(stage_names(task)),
                 }
+                if session.recorder.measure_keys:
+                    block["measures"] = [session.recorder.measures[s] for s in seeds]
                 _write_block(folders[condition], begin, block)
             tracked[condition].add(tuple(block.get("stage_names", tracked_before(task))))  # older blocks: no names
             for name, values in block.items():
                 if name in outcomes[condition]:
                     outcomes[condition][name].extend(values)
+            measured[condition] += block.get("measures") or [None] * len(block["seeds"])  # older blocks: none
         stops = decide(outcomes[TRAIN_SUITE]["successes"], {c: outcomes[c]["successes"] for c in shifted}, rule)
         active = running(stops)
         active = [TRAIN_SUITE, *active] if active else []
@@ -119,7 +123,10 @@ def run_group(steps: list[Step], study_dir: Path, open_session: OpenSession, wri
             if condition not in sessions:
                 sessions[condition] = open_session(step)
             stages = as_tracked(task, own["stages"], names)
-            result = sessions[condition].result(own["successes"], own["seeds"], stages, own["lengths"], list(names))
+            measures = measured[condition][:n]
+            result = sessions[condition].result(
+                own["successes"], own["seeds"], stages, own["lengths"], list(names), measures
+            )
         result[SEQUENTIAL] = stops[condition].to_dict()
         result[EPISODES_RUN] = ran[condition]
         write(step, result)

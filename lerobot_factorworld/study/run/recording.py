@@ -19,6 +19,7 @@ from ...envs.stages import STAGE_KEY
 
 VIDEOS_DIR = "episodes"  # in a step's folder, and next to a study's report
 RECORDED_KEY = "recorded"  # an eval step's result: the episodes it recorded (absent when none was)
+MEASURES_KEY = "measures"  # an eval step's result: each episode's family measures (absent for a family with none)
 RECORD_SETTING = "record_episodes"  # how an eval step runs (never in its key): episodes to record per condition
 CODEC = "libvpx-vp9"  # WebM: every browser plays it, Chromium's open builds included
 PLAYBACK_FPS = 20  # a quarter of Meta-World's 80 Hz control: a 200-step episode plays in 10 s, slow enough to follow
@@ -26,12 +27,14 @@ PLAYBACK_FPS = 20  # a quarter of Meta-World's 80 Hz control: a 200-step episode
 
 @dataclass
 class EpisodeRecorder:
-    """An env's ``episode_observer`` for one evaluation: per reset seed, the furthest stage and the steps of
-    every seeded episode (an unseeded one, begun by an autoreset that the rollout discards, is not recorded),
-    and the frames of the episodes reset with one of ``record_seeds``."""
+    """An env's ``episode_observer`` for one evaluation: per reset seed, the furthest stage, the steps and the
+    family's ``measure_keys`` of every seeded episode (an unseeded one, begun by an autoreset that the rollout
+    discards, is not recorded), and the frames of the episodes reset with one of ``record_seeds``."""
 
     record_seeds: frozenset[int] = frozenset()
+    measure_keys: tuple[str, ...] = ()  # info keys kept from each episode's last step (TaskFamily.episode_measures)
     stages: dict[int, str] = field(default_factory=dict)
+    measures: dict[int, dict[str, float]] = field(default_factory=dict)
     lengths: dict[int, int] = field(default_factory=dict)
     frames: dict[int, list[np.ndarray]] = field(default_factory=dict)
     _seed: dict[int, int | None] = field(default_factory=dict)  # id(env) -> seed of its current episode
@@ -52,6 +55,8 @@ class EpisodeRecorder:
             self._keep_frame(env, seed)
         if terminated or truncated:
             self.stages[seed], self.lengths[seed] = info[STAGE_KEY], self._steps[id(env)]
+            if self.measure_keys:
+                self.measures[seed] = {key: round(float(info[key]), 6) for key in self.measure_keys}
 
     def _keep_frame(self, env: Any, seed: int) -> None:
         frame = env.render()  # the observation's frame, already rendered: no second render

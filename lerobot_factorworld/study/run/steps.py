@@ -50,7 +50,7 @@ from . import blocks
 from .checkpoint import GIVEN_CHECKPOINT, checkpoint_folder
 from .eval_env import eval_env_config
 from .inputs import MERGED_FRAMES, CollectInputs, EvalInputs, TrainInputs, whole_epochs
-from .recording import RECORD_SETTING, RECORDED_KEY, EpisodeRecorder, write_recorded
+from .recording import MEASURES_KEY, RECORD_SETTING, RECORDED_KEY, EpisodeRecorder, write_recorded
 from .step import STEPS_DIR, Step, short_hash, step_folder
 from .train_state import (
     CHECKPOINTS_DIR,
@@ -749,7 +749,7 @@ class EvalSession:
             self.envs = make_env(env_cfg, n_envs=inputs.batch_size or 1, use_async_envs=False)
         # Stages, lengths and the first episodes' frames, from the envs' own observer hook (instances only).
         recorded = range(inputs.start_seed, inputs.start_seed + min(run.get(RECORD_SETTING, 0), inputs.episodes))
-        self.recorder = EpisodeRecorder(frozenset(recorded))
+        self.recorder = EpisodeRecorder(frozenset(recorded), family_of(self.task).episode_measures)
 
     def _load(self) -> None:
         with self.timings.span("policy_load"):
@@ -796,6 +796,7 @@ class EvalSession:
         stages: list[str] | None = None,
         lengths: list[int] | None = None,
         tracked: list[str] | None = None,
+        measures: list[dict[str, float]] | None = None,
     ) -> dict[str, Any]:
         """The step's result for these episodes (``stages``, ``lengths`` and the stages ``tracked``: blocks', read
         back from their cache; else this run's, which tracks the task's stages of now)."""
@@ -818,6 +819,8 @@ class EvalSession:
                 "checkpoint": self.checkpoint,
                 "policy_type": self.policy_cfg.type,  # a given checkpoint's type is known from it only
             }
+            if recorder.measure_keys:  # the family's per-episode measures (e.g. how close the gripper came)
+                result[MEASURES_KEY] = measures if measures is not None else of_seeds(recorder.measures, seeds)
             if recorder.frames:  # the recorded episodes' frames as videos (not results: they change no number)
                 result[RECORDED_KEY] = write_recorded(recorder, seeds, folder)
             family = family_of(self.task)
