@@ -369,6 +369,41 @@ def test_evaluated_episodes_records_are_recovered_from_their_seeds_and_broken_do
     assert set(by_instruction) == {r["instruction"] for r in records} and sum(map(len, by_instruction.values())) == 8
 
 
+def test_what_the_gripper_did_is_broken_down_and_reported_where_it_was_measured():
+    """An evaluation's ``measures`` (the gripper's closest approach per episode): which object it came closest to,
+    and how close to the named one, in ``pick_breakdowns.csv`` and its report section; without them, neither."""
+    from types import SimpleNamespace
+
+    from lerobot_factorworld.family_reports.pick import breakdown_rows, breakdown_section
+    from lerobot_factorworld.pick.records import episode_records, measure_breakdown
+
+    measures = [
+        {"closest_named": 0.01, "closest_other": 0.2},
+        {"closest_named": 0.05, "closest_other": 0.1},
+        {"closest_named": 0.3, "closest_other": 0.02},
+        None,  # an episode of a block recorded without measures
+    ]
+    successes = [True, False, False, False]
+    assert list(measure_breakdown(successes, measures, "closest").items()) == [
+        ("named object", [True, False]), ("another object", [False])
+    ]  # fmt: skip
+    assert list(measure_breakdown(successes, measures, "named_within").items()) == [
+        ("3 cm", [True]), ("6 cm", [False]), ("farther", [False])
+    ]  # fmt: skip
+    with pytest.raises(ValueError, match="valid: closest, named_within"):
+        measure_breakdown(successes, measures, "nearest")
+    labels = {"method": "m", "task": TASK, "n_train_envs": 2, "seed": 0, "condition": "train"}
+    records = episode_records(sample_configs(TASK, 2, seed=0), range(4))
+    result = {"successes": successes, "pick": records}
+    rows = breakdown_rows([SimpleNamespace(labels=labels, result=result)])
+    assert not any(r["by"] in ("closest", "named_within") for r in rows)  # no measures: no such rows
+    assert "| m: closest | train |" not in "\n".join(breakdown_section(rows))
+    rows = breakdown_rows([SimpleNamespace(labels=labels, result={**result, "measures": measures})])
+    text = "\n".join(breakdown_section(rows))
+    assert "| m: closest | train |\n|---|---|\n| named object | 1/2 |\n| another object | 0/1 |" in text
+    assert "| m: named_within | train |\n|---|---|\n| 3 cm | 1/1 |\n| 6 cm | 0/1 |\n| farther | 0/1 |" in text
+
+
 def _collect_pick(folder: Path):
     root = folder / "data"
     cfg = CollectConfig(

@@ -15,7 +15,7 @@ from pathlib import Path
 from typing import Any
 
 from ..core.io import atomic_write_text, read_table
-from ..pick.records import BY, breakdown
+from ..pick.records import BY, MEASURE_BY, breakdown, measure_breakdown
 from ..protocol.conditions import TRAIN_SUITE
 from ..study.metrics import spearman
 from ..study.paper import PAPER_REAL_ROBOT
@@ -132,8 +132,12 @@ def breakdown_rows(evaluations: Sequence[Evaluation]) -> list[dict]:
         if not records:
             continue
         labels = evaluation.labels
-        for by in BY:
-            for value, outcomes in breakdown(evaluation.result["successes"], records, by).items():
+        successes, measures = evaluation.result["successes"], evaluation.result.get("measures")
+        groups = [(by, breakdown(successes, records, by)) for by in BY]
+        if measures:  # what the gripper did, where the evaluation recorded it
+            groups += [(by, measure_breakdown(successes, measures, by)) for by in MEASURE_BY]
+        for by, grouped in groups:
+            for value, outcomes in grouped.items():
                 rows.append(
                     {
                         **{k: labels[k] for k in ("method", "task", "n_train_envs", "seed", "condition")},
@@ -173,11 +177,21 @@ def breakdown_section(rows: Sequence[dict]) -> list[str]:
         f"Summed over N and seeds, per method; per instruction in `{BREAKDOWN_FILE}`.",
         "",
     ]
+    if any(r["by"] in MEASURE_BY for r in rows):
+        lines[-1:-1] = [
+            "`closest`: the object the gripper's centre came closest to during the episode; `named_within`: how close "
+            "it came to the named object's centre (`3 cm` is the `reached` radius; an episode at `none` that went to "
+            "the named object shows in `6 cm` or `10 cm`).",
+            "",
+        ]
     conditions = list(dict.fromkeys(r["condition"] for r in rows))
     for method in dict.fromkeys(r["method"] for r in rows):
         mine = [r for r in rows if r["method"] == method]
-        for by in MARKDOWN_BY:
-            values = sorted({r["value"] for r in mine if r["by"] == by})
+        for by in (*MARKDOWN_BY, *MEASURE_BY):
+            values = list(dict.fromkeys(r["value"] for r in mine if r["by"] == by))  # in the CSV's (bin) order
+            if by not in MARKDOWN_BY and not values:
+                continue
+            values = values if by in MEASURE_BY else sorted(values)
             lines += [f"| {method}: {by} | " + " | ".join(conditions) + " |", "|---" * (len(conditions) + 1) + "|"]
             for value in values:
                 cells = []

@@ -44,3 +44,35 @@ def breakdown(successes: Sequence[bool], records: Sequence[dict], by: str) -> di
         key = get_object(record["target"]).shape if by == "shape" else record[by]
         groups[key].append(bool(success))
     return dict(sorted(groups.items()))
+
+
+MEASURE_BY = ("closest", "named_within")
+"""Breakdowns by what the gripper did (an evaluation's ``measures``): which object its centre came closest to, and
+how close it came to the named one."""
+WITHIN_CM = (3, 6, 10)  # bins of the closest approach to the named object; 3 cm is the ``reached`` radius
+
+
+def measure_breakdown(successes: Sequence[bool], measures: Sequence[dict | None], by: str) -> dict[str, list[bool]]:
+    """Outcomes grouped by the object the gripper's centre came closest to (``closest``: ``named object`` or
+    ``another object``) or by how close it came to the named object (``named_within``: ``3 cm``, ``6 cm``,
+    ``10 cm``, ``farther``); episodes recorded without measures are left out."""
+    if by not in MEASURE_BY:
+        raise ValueError(f"unknown breakdown {by!r}; valid: {', '.join(MEASURE_BY)}")
+    groups: dict[str, list[bool]] = defaultdict(list)
+    for success, measure in zip(successes, measures, strict=True):
+        if not measure:
+            continue
+        named = measure["closest_named"]
+        if by == "closest":
+            key = "named object" if named <= measure["closest_other"] else "another object"
+        else:
+            key = next((f"{cm} cm" for cm in WITHIN_CM if named <= cm / 100), "farther")
+        groups[key].append(bool(success))
+    return dict(sorted(groups.items(), key=lambda item: _bin_order(item[0])))
+
+
+def _bin_order(key: str) -> tuple[int, str]:
+    """The named object before another; bins from the nearest to ``farther``."""
+    if key in ("named object", "another object"):
+        return (0 if key == "named object" else 1, key)
+    return (int(key.split()[0]) if key[0].isdigit() else 10**6, key)
