@@ -8,7 +8,8 @@ Commands:
     contact-sheet   render a task under every factor (PNG)
     collect         scripted demos -> LeRobotDataset with per-episode factor values (resumable)
     rt1-presets     the RT-1 presets and their parameter counts
-    study           the generalization-gap study: collect, train, evaluate, report (--config=NAME or FILE.yaml, --dry-run)
+    study           the generalization-gap study: collect, train, evaluate, report (--config=NAME or FILE.yaml, --dry-run,
+                    --report-only: the report of the steps finished so far)
     configs         the study configs that ship with the package (--config=NAME) and their --dry-run cost
     profile         an existing checkpoint under every factor, written as a study (--policy.path=DIR --task=TASK)
     report          regenerate a study's report.md and plots from its results.csv alone (--results=CSV)
@@ -154,19 +155,27 @@ STUDY_FLAG_ALIASES = {
     "--dry-run": "--dry_run=true",
     "--strict": "--strict=true",
     "--rerun-stale": "--rerun_stale=true",
+    "--report-only": "--report_only=true",
 }
 
 
 def cmd_study(args: list[str]) -> None:
     # LeRobot and torch (~4 s): `factorworld tasks` and friends stay instant
     from .study.plan.command import StudyCommand  # noqa: PLC0415
-    from .study.runner import inspect_study, run_study  # noqa: PLC0415
+    from .study.runner import inspect_study, report_study, run_study  # noqa: PLC0415
 
     command = "factorworld study " + " ".join(args)
     cfg = parse_config(StudyCommand, _study_args(args), "study")
     study, options = cfg.grid(), cfg.options()
     if options.inspects:  # --dry-run, --profile, --fit_cost: nothing runs
         print(inspect_study(study, options))
+        return
+    if options.report_only:  # nothing runs: the outputs of the steps finished so far
+        outcome = report_study(study, options, command)
+        finished = ", ".join(f"{n} {kind}" for kind, n in outcome.cached.items())
+        print(
+            f"finished so far: {finished}; wrote {outcome.results}, {outcome.report} and {len(outcome.plots)} plot(s)"
+        )
         return
     _report_outcome(run_study(study, options, command=command))
 

@@ -71,6 +71,16 @@ def test_inspect_study_describes_the_plan_with_the_options_execution(tmp_path):
         runner.inspect_study(grid, RunOptions())
     with pytest.raises(ValueError, match="use inspect_study"):
         runner.run_study(grid, options)
+    with pytest.raises(ValueError, match="report_only runs nothing: use report_study"):
+        runner.run_study(grid, RunOptions(report_only=True))
+    with pytest.raises(ValueError, match="report_study writes the report of a study's finished steps"):
+        runner.report_study(grid, options, "factorworld study")
+    # nothing finished yet: refused in one line, and nothing written
+    with pytest.raises(
+        ValueError, match=r"nothing to report: none of this study's 2 evaluations has finished in .*out; run the study"
+    ):
+        runner.report_study(grid, RunOptions(report_only=True), "factorworld study")
+    assert not (tmp_path / "out").exists()
 
 
 @pytest.mark.parametrize(
@@ -82,6 +92,7 @@ def test_inspect_study_describes_the_plan_with_the_options_execution(tmp_path):
         ({"strict": True, "rerun_stale": True}, "strict=true refuses steps made by other code"),
         ({"dry_run": True, "profile": True}, "dry_run, profile and fit_cost each inspect the study"),
         ({"push_to_hub": True}, "push_to_hub=true needs --hub_repo_id=<user>/<name>"),
+        ({"report_only": True, "dry_run": True, "rerun_stale": True}, "runs nothing; dry_run, rerun_stale would run"),
     ],
 )
 def test_a_bad_option_is_refused_naming_the_valid_choices(options, message):

@@ -546,9 +546,14 @@ def test_toy_study_end_to_end(toy):
 
 @TOY_GROUP
 @pytest.mark.slow
-def test_rerun_does_no_new_work_and_interrupted_study_resumes(toy):
+def test_rerun_does_no_new_work_and_interrupted_study_resumes(toy, run_main):
+    import csv
+    import fcntl
+    import io
+
+    from lerobot_factorworld.cli import main
     from lerobot_factorworld.study.plan.grid import make_plan
-    from lerobot_factorworld.study.runner import run_study
+    from lerobot_factorworld.study.runner import LOCK_FILE, run_study
 
     cfg, first = toy
     before = first.results.read_text()
@@ -562,6 +567,19 @@ def test_rerun_does_no_new_work_and_interrupted_study_resumes(toy):
         (step.folder(cfg.out_dir) / "result.json").unlink()
     (evals[1].folder(cfg.out_dir) / "result.json.tmp123").write_text("{half")
     first.results.unlink()
+    # --report-only while a run holds the study's lock: the finished steps' outputs, nothing run
+    config = Path(cfg.out_dir).with_suffix(".yaml")  # the toy's config file (_toy_config)
+    with open(Path(cfg.out_dir) / LOCK_FILE, "w") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        proc = run_main(["factorworld", "study", f"--config={config}", "--report-only"], main)
+    assert proc.returncode == 0, proc.stderr
+    assert "finished so far: 2 collect, 2 train, 6 eval" in proc.stdout
+    lost = {(str(s.meta["n_train_envs"]), s.meta["condition"]) for s in evals[:2]}
+    counts = {(r["n_train_envs"], r["condition"]): r["successes"] for r in csv.DictReader(io.StringIO(before))}
+    written = {(r["n_train_envs"], r["condition"]): r["successes"] for r in csv.DictReader(first.results.open())}
+    assert len(lost) == 2 and written == {cell: n for cell, n in counts.items() if cell not in lost}
+    assert "(6 of 8 evaluations finished)" in first.report.read_text()
+    assert all(not (s.folder(cfg.out_dir) / "result.json").exists() for s in evals[:2])
     resumed = run_study(*cfg.parts(), command="resume")
     assert resumed.ran == {"collect": 0, "train": 0, "eval": 2}
     assert resumed.results.read_text() == before  # same rows, none duplicated

@@ -108,6 +108,8 @@ def run_study(cfg: StudyConfig, options: RunOptions | None = None, command: str 
         )
     if options.inspects:
         raise ValueError("dry_run, profile and fit_cost run nothing: use inspect_study")
+    if options.report_only:
+        raise ValueError("report_only runs nothing: use report_study")
     check_reuse_from(options.reuse_from, cfg.out_dir)
     start = time.perf_counter()
     fetch_checkpoints([m.checkpoint for m in cfg.given_methods()])  # before planning: keys hash their files
@@ -140,6 +142,31 @@ def run_study(cfg: StudyConfig, options: RunOptions | None = None, command: str 
         outcome.results, outcome.report, outcome.plots = write_report(cfg, plan, study_dir, command)
         if options.push_to_hub:
             outcome.pushed = _push(options, outcome)
+    return outcome
+
+
+def report_study(cfg: StudyConfig, options: RunOptions, command: str) -> StudyOutcome:
+    """``report_only``: the study's outputs written from its steps finished so far, nothing run. It takes no lock:
+    a run of the study in another process (which holds it) only ever adds finished steps, written whole, and
+    rewrites these outputs when it ends. Cached steps made by other code are named (refused under ``strict``)
+    as a run would."""
+    _check_grid(cfg)
+    if not options.report_only:
+        raise ValueError("report_study writes the report of a study's finished steps: it needs report_only")
+    plan, study_dir = make_plan(cfg), Path(cfg.out_dir)
+    finished = sum(1 for step in plan.evaluations() if is_done(step, study_dir))
+    if not finished:
+        raise ValueError(
+            f"nothing to report: none of this study's {len(plan.evaluations())} evaluations has finished in "
+            f"{study_dir}; run the study first (the same command without report_only)"
+        )
+    stale = stale_steps(plan, study_dir)
+    check_not_stale(options, stale)
+    warn_stale(options, plan, study_dir, stale)
+    outcome = StudyOutcome(study_dir)
+    for kind in KINDS:
+        outcome.cached[kind] = sum(1 for step in plan.of_kind(kind) if is_done(step, study_dir))
+    outcome.results, outcome.report, outcome.plots = write_report(cfg, plan, study_dir, command)
     return outcome
 
 

@@ -1,5 +1,5 @@
 """How a study runs, never what it computes: the executor and its workers, whether it only inspects the plan
-(``dry_run``, ``profile``, ``fit_cost``), what happens to cached steps made by other code (``strict``,
+(``dry_run``, ``profile``, ``fit_cost``) or only reports the steps finished so far (``report_only``), what happens to cached steps made by other code (``strict``,
 ``rerun_stale``), finished steps linked from other studies (``reuse_from``), and the push of its results to the
 Hub. None of these enters a step's key: the same grid gives the same keys, results and checkpoints whichever way
 it runs. The grid itself is :class:`..plan.config.StudyConfig`.
@@ -14,6 +14,8 @@ from ...datasets.hub import check_hub_repo_id
 from .steps import EXECUTIONS
 
 EXECUTORS = ("local", "ray")
+# what report_only cannot go with: other ways of not running (each inspects), redoing steps, pushing a finished study
+REPORT_ONLY_CLASHES = ("dry_run", "profile", "fit_cost", "rerun_stale", "push_to_hub")
 
 
 @dataclass
@@ -30,6 +32,9 @@ class RunOptions:
             ``lerobot-train`` as a subprocess and every evaluation as its own task.
         dry_run: Print the plan (steps per kind, cached, cost estimate, power) and stop.
         profile: Run nothing; print where the finished steps' time went (per kind and component).
+        report_only: Run nothing; write ``results.csv``, ``episodes.parquet``, ``curve.csv``, the plots and
+            ``report.md`` from the steps finished so far, also while another process runs the study (a long
+            learning curve's points as they come): that run rewrites them when it ends.
         fit_cost: Run nothing; refit the ``--dry-run`` cost model's constants from the finished steps'
             timings and write them to ``study/plan/cost_model.json``.
         strict: Refuse to run (one ``error:`` line, before any work) when cached steps of the plan were
@@ -57,6 +62,7 @@ class RunOptions:
     dry_run: bool = False
     profile: bool = False
     fit_cost: bool = False
+    report_only: bool = False
     strict: bool = False
     rerun_stale: bool = False
     push_to_hub: bool = False
@@ -88,6 +94,13 @@ class RunOptions:
             raise ValueError("strict=true refuses steps made by other code, rerun_stale=true redoes them: set one")
         if sum((self.dry_run, self.profile, self.fit_cost)) > 1:
             raise ValueError("dry_run, profile and fit_cost each inspect the study in their own way: set one")
+        if self.report_only:
+            clashing = [name for name in REPORT_ONLY_CLASHES if getattr(self, name)]
+            if clashing:
+                raise ValueError(
+                    f"report_only writes the report of the finished steps and runs nothing; {', '.join(clashing)} "
+                    "would run or inspect: set one"
+                )
         if self.push_to_hub:
             if not self.hub_repo_id and not self.model_repo_id:
                 raise ValueError(
