@@ -14,7 +14,7 @@ from toy_study import write_toy_study
 
 from lerobot_factorworld.core.settings import parse_config
 from lerobot_factorworld.envs.stages import stage_names
-from lerobot_factorworld.study.metrics import newcombe_independent
+from lerobot_factorworld.study.metrics import newcombe_independent, paired_gap
 from lerobot_factorworld.study.plan.command import StudyCommand
 from lerobot_factorworld.study.plan.config import TrainSettings
 from lerobot_factorworld.study.plan.grid import CURVE_EPOCHS, make_plan
@@ -131,6 +131,46 @@ def test_the_curve_section_gives_each_step_along_a_curve_and_each_method_against
     assert "Still training: b has reached 12 of its 16 epochs" in short and "The last column" not in short
 
 
+def test_points_holding_their_episodes_outcomes_are_compared_episode_by_episode():
+    """Points with ``outcomes`` (the same episode seeds at every checkpoint and for every method) get Newcombe's
+    paired interval, over their cells' episodes in one order; a point without them, or whose cells differ, the
+    independent one, marked where the table has both kinds."""
+    early = "110000000000" + "0" * 18  # 2 of 30
+    later = "111111000000" + "0" * 18  # 6 of 30: the two early successes again, and four more
+    rows = [
+        {"method": "b", "task": "t", "n_train_envs": 10, "seed": 0, "epochs": e, "episodes": 30,
+         "successes": o.count("1"), "outcomes": o} for e, o in ((8, early), (16, later))
+    ]  # fmt: skip
+    text = "\n".join(curve_section(rows, plotted=False, methods=["b"]))
+    diff, low, high = paired_gap([o == "1" for o in later], [o == "1" for o in early])
+    independent = newcombe_independent(6, 30, 2, 30)
+    assert diff == pytest.approx(independent[0]) == pytest.approx(4 / 30) and low > independent[1]  # narrower
+    assert f"| b | its checkpoint before | t |  | {diff:+.2f} [{low:+.2f}, {high:+.2f}] |" in text
+    assert "95% interval for paired samples (episode by episode) (each on its own" in text and "indep." not in text
+    # a second cell (another seed) pairs its own episodes: 12 more, the later point losing one of its own
+    second = [
+        {**r, "seed": 1, "outcomes": o, "successes": o.count("1")} for r, o in zip(rows, ("1" * 12, "1" * 11 + "0"))
+    ]
+    (point_8, point_16) = pooled_curve(rows + second)
+    assert point_8["outcomes"] == {("10", "0", ""): early, ("10", "1", ""): "1" * 12}
+    both = "\n".join(curve_section(rows + second, plotted=False, methods=["b"]))
+    pooled = paired_gap([o == "1" for o in later + "1" * 11 + "0"], [o == "1" for o in early + "1" * 12])
+    assert f"| {pooled[0]:+.2f} [{pooled[1]:+.2f}, {pooled[2]:+.2f}] |" in both
+    # a method against the first: paired on the cells both have; a method with other cells: independent, marked
+    other = [{**r, "method": "a", "outcomes": "0" * 30, "successes": 0} for r in rows]
+    other[1] = {**other[1], "seed": 3}
+    mixed = "\n".join(curve_section(rows + other, plotted=False, methods=["b", "a"]))
+    against_8 = paired_gap([False] * 30, [o == "1" for o in early])
+    against_16 = newcombe_independent(0, 30, 6, 30)
+    assert f"| a | b | t | {against_8[0]:+.2f} [{against_8[1]:+.2f}, {against_8[2]:+.2f}] | " in mixed
+    assert f" | {against_16[0]:+.2f} [{against_16[1]:+.2f}, {against_16[2]:+.2f}] (indep.) |" in mixed
+    assert "or for two independent samples where a point lacks its episodes' outcomes (marked *indep.*)" in mixed
+    # without outcomes (an older curve.csv): the independent interval and the text it always had
+    old = "\n".join(curve_section([{**r, "outcomes": ""} for r in rows], plotted=False, methods=["b"]))
+    assert f"| {independent[0]:+.2f} [{independent[1]:+.2f}, {independent[2]:+.2f}] |" in old
+    assert "Newcombe's 95% interval for two independent samples (each on its own" in old and "paired samples" not in old
+
+
 def test_the_curve_says_which_machines_trained_each_checkpoint(tmp_path):
     """A checkpoint's machines are its training's runs before the step it was saved at (``trained_on``), each once in
     the order they trained; the report says so in one sentence for one machine, per checkpoint otherwise."""
@@ -197,6 +237,10 @@ def test_the_curve_shows_where_each_checkpoint_s_episodes_end_and_reads_older_fi
         assert [r["stages"] for r in merge_curve_rows(parts, plan, names)] == [new["stages"]]
     with pytest.raises(ValueError, match="differs between old and new in successes"):
         merge_curve_rows([[old], [{**new, "successes": 2}]], plan, ["old", "new"])
+    with pytest.raises(
+        ValueError, match="differs between new and again in outcomes"
+    ):  # the same counts, other episodes
+        merge_curve_rows([[{**new, "outcomes": "10"}], [{**new, "outcomes": "01"}]], plan, ["new", "again"])
     other = {**new, "stages": "none:0;reached:1;succeeded:1"}  # two parts that both hold stages must agree
     with pytest.raises(ValueError, match="differs between new and other in stages"):
         merge_curve_rows([[old], [new], [other]], plan, ["old", "new", "other"])  # named by the part that held it
@@ -242,6 +286,7 @@ def test_a_study_with_a_curve_evaluates_each_checkpoint_and_reports_it(tmp_path)
         counts = parse_stage_counts(row["stages"])
         assert list(counts) == list(stage_names("handle-press")) and sum(counts.values()) == 2
         assert counts["succeeded"] == row["successes"]
+        assert len(row["outcomes"]) == 2 and row["outcomes"].count("1") == row["successes"]  # episode by episode
     steps = [r["steps"] for r in rows]
     assert steps[1] == 2 * steps[0] and steps[2] > steps[1]
     checkpoints = sorted(p.name for p in (tmp_path / "out" / "steps" / "train").glob("*/train/checkpoints/*"))

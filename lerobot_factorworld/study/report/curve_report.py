@@ -10,8 +10,8 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
-from ..metrics import newcombe_independent
-from ..results.curve import CURVE_FILE, MACHINES_SEPARATOR, pooled_curve
+from ..metrics import newcombe_independent, paired_gap
+from ..results.curve import CURVE_FILE, MACHINES_SEPARATOR, paired_outcomes, pooled_curve
 from .markdown import ci, stage_row
 from .plots import draw_intervals, pyplot, save_figure
 
@@ -131,14 +131,15 @@ def _stages(by_line: dict[tuple[str, str], dict[float, dict]]) -> list[str]:
 def _differences(
     by_line: dict[tuple[str, str], dict[float, dict]], epochs: list[float], methods: Sequence[str]
 ) -> list[str]:
-    """The curve's differences with Newcombe's 95% interval for independent samples, each on its own (not
-    corrected for the others): a description of where the curve moves, not a verdict. A step along a curve is
-    from the curve's own checkpoint before (methods may save at other epochs)."""
+    """The curve's differences, each with Newcombe's 95% interval on its own (not corrected for the others): a
+    description of where the curve moves, not a verdict. Paired (episode by episode) where both points hold their
+    episodes' outcomes, else for independent samples, marked where a table has both kinds. A step along a curve
+    is from the curve's own checkpoint before (methods may save at other epochs)."""
     rows = []
     for (method, task), points in by_line.items():
         own = sorted(points)
         steps = {e: _diff(points[e], points[before]) for before, e in zip(own, own[1:])}
-        rows.append((method, "its checkpoint before", task, [steps.get(e, "") for e in epochs]))
+        rows.append((method, "its checkpoint before", task, [steps.get(e) for e in epochs]))
     order = {name: i for i, name in enumerate(methods)}
     first: dict[str, str] = {}
     for method, task in sorted(by_line, key=lambda line: order.get(line[0], len(order))):
@@ -147,30 +148,70 @@ def _differences(
         if method != first[task]:
             base = by_line[(first[task], task)]
             rows.append((method, first[task], task, [_diff(points.get(e), base.get(e)) for e in epochs]))
-    if not any(cell for *_, cells in rows for cell in cells):
+    kinds = {cell[1] for *_, cells in rows for cell in cells if cell}
+    if not kinds:
         return []
+    mixed = len(kinds) == 2
+
+    def text(cell: tuple[str, bool] | None) -> str:
+        if cell is None:
+            return ""
+        return cell[0] + (" (indep.)" if mixed and not cell[1] else "")
+
     return [
         "",
         "### Differences along the curve and between methods",
         "",
         "Each checkpoint's P_T minus the checkpoint before it on the same curve, and each method's minus the first "
-        "method's (in the config's order) at the same epochs on the same task, with Newcombe's 95% interval for two independent samples "
+        f"method's (in the config's order) at the same epochs on the same task, with {_interval_text(kinds)} "
         "(each on its own, not corrected for the others: a description of where the curve moves, not a verdict). "
         "Like the table above, an interval holds the episodes' noise only, not the spread between training seeds, "
-        "so between methods it can be too narrow; and the checkpoints play the same episode seeds, so where that "
-        "makes their outcomes positively correlated, a paired interval would be narrower.",
+        f"so between methods it can be too narrow{_pairing_text(kinds)}",
         "",
         "| method | against | task | " + " | ".join(f"{e:g} epochs" for e in epochs) + " |",
         "|---|---|---|" + "---|" * len(epochs),
-        *(f"| {method} | {against} | {task} | " + " | ".join(cells) + " |" for method, against, task, cells in rows),
+        *(
+            f"| {method} | {against} | {task} | " + " | ".join(text(c) for c in cells) + " |"
+            for method, against, task, cells in rows
+        ),
     ]
 
 
-def _diff(point: dict | None, other: dict | None) -> str:
+def _interval_text(kinds: set[bool]) -> str:
+    if kinds == {False}:
+        return "Newcombe's 95% interval for two independent samples"
+    if kinds == {True}:
+        return "Newcombe's 95% interval for paired samples (episode by episode)"
+    return (
+        "Newcombe's 95% interval for paired samples (episode by episode), or for two independent samples where a "
+        "point lacks its episodes' outcomes (marked *indep.*)"
+    )
+
+
+def _pairing_text(kinds: set[bool]) -> str:
+    """Why the intervals pair the episodes, or what pairing them would change (an older ``curve.csv``)."""
+    if kinds == {False}:
+        return (
+            "; and the checkpoints play the same episode seeds, so where that makes their outcomes positively "
+            "correlated, a paired interval would be narrower."
+        )
+    return (
+        ". Every checkpoint and method plays the same episode seeds in the same training environments, so episode i "
+        f"of one point is paired with episode i of the other (their outcomes: `outcomes` in `{CURVE_FILE}`)."
+    )
+
+
+def _diff(point: dict | None, other: dict | None) -> tuple[str, bool] | None:
+    """``point`` minus ``other`` with its interval, and whether the interval is paired; ``None`` without both."""
     if not point or not other:
-        return ""
-    diff, low, high = newcombe_independent(point["successes"], point["episodes"], other["successes"], other["episodes"])
-    return f"{diff:+.2f} {ci(low, high, 2)}"
+        return None
+    paired = paired_outcomes(point, other)
+    if paired is not None:
+        diff, low, high = paired_gap(*paired)
+    else:
+        k1, n1, k2, n2 = point["successes"], point["episodes"], other["successes"], other["episodes"]
+        diff, low, high = newcombe_independent(k1, n1, k2, n2)
+    return f"{diff:+.2f} {ci(low, high, 2)}", paired is not None
 
 
 def plot_curve(rows: Sequence[dict[str, Any]], path: Path) -> bool:

@@ -40,8 +40,9 @@ CURVE_COLUMNS = (
     "step",  # key of the eval step
     "stages",  # episodes per furthest stage, as results.csv's column: where the checkpoint's failures end
     "trained_on",  # the machines that trained the checkpoint, in the order they did (MACHINES_SEPARATOR between)
+    "outcomes",  # each episode's success in episode order ("1" or "0"; episode i played at seed start_seed + i)
 )
-OPTIONAL_CURVE_COLUMNS = ("stages", "trained_on")  # added later: older curve.csv files lack them
+OPTIONAL_CURVE_COLUMNS = ("stages", "trained_on", "outcomes")  # added later: older curve.csv files lack them
 MACHINES_SEPARATOR = " | "  # between the machines of trained_on (machine.describe's text holds ';' and ',')
 CELL = ("method", "task", "n_train_envs", "seed", "widths")
 
@@ -101,7 +102,13 @@ def _row(cfg: StudyConfig, evaluation: Evaluation, epochs: float, saved_at: int)
         "stages": stage_counts_text(
             meta["task"], evaluation.result.get("stages"), evaluation.result.get("stage_names")
         ),
+        "outcomes": outcomes_text(successes),
     }
+
+
+def outcomes_text(successes: Sequence[bool]) -> str:
+    """Episodes' successes as ``curve.csv`` holds them: one character each, in episode order."""
+    return "".join("1" if success else "0" for success in successes)
 
 
 def _in_task_order(task: str, counts: Counter) -> dict[str, int]:
@@ -129,9 +136,10 @@ def read_curve(path: str | Path) -> list[dict[str, Any]]:
 def pooled_curve(rows: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
     """Per (method, task, epochs): the episodes and successes summed over N, seeds and widths, with the Wilson
     95% interval of the pooled rate (episodes of one checkpoint are independent given it; seeds add variance
-    this interval does not hold, so it is a lower bound on the spread between seeds), and the episodes per
-    furthest stage summed the same way (``{}`` where a row has no stage counts)."""
-    pooled: dict[tuple, list] = defaultdict(lambda: [0, 0, 0, Counter(), True])
+    this interval does not hold, so it is a lower bound on the spread between seeds), the episodes per
+    furthest stage summed the same way (``{}`` where a row has no stage counts), and each cell's episode
+    outcomes by (N, seed, widths) (``None`` where a row has none), which pair two points' episodes."""
+    pooled: dict[tuple, list] = defaultdict(lambda: [0, 0, 0, Counter(), True, {}])
     for row in rows:
         point = pooled[(row["method"], row["task"], float(row["epochs"]))]
         point[0] += row["successes"]
@@ -140,10 +148,32 @@ def pooled_curve(rows: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
         stages = parse_stage_counts(row.get("stages", ""))
         point[3].update(stages)
         point[4] = point[4] and bool(stages)
+        if point[5] is not None:
+            outcomes = row.get("outcomes", "")
+            point[5] = {**point[5], _paired_cell(row): outcomes} if outcomes else None
     out = []
-    for (method, task, epochs), (k, n, cells, stages, staged) in sorted(pooled.items()):
+    for (method, task, epochs), (k, n, cells, stages, staged, outcomes) in sorted(pooled.items()):
         low, high = wilson_interval(k, n)
         out.append({"method": method, "task": task, "epochs": epochs, "cells": cells, "successes": k,
                     "episodes": n, "success_rate": k / n if n else math.nan, "ci_low": low, "ci_high": high,
-                    "stages": _in_task_order(task, stages) if staged else {}})  # fmt: skip
+                    "stages": _in_task_order(task, stages) if staged else {}, "outcomes": outcomes})  # fmt: skip
     return out
+
+
+def _paired_cell(row: dict[str, Any]) -> tuple[str, ...]:
+    """What two points' cells must share for their episodes to pair (the same training environments and episode
+    seeds): N, seed and widths; the method and the checkpoint may differ."""
+    return tuple(str(row.get(c, "")) for c in CELL[2:])
+
+
+def paired_outcomes(point: dict[str, Any], other: dict[str, Any]) -> tuple[list[bool], list[bool]] | None:
+    """Two pooled points' episode outcomes, episode by episode (cells in one order), when both hold every cell's
+    outcomes for the same cells with equal episode counts: the same episode seeds in the same environments, as a
+    study plays them at every checkpoint and for every method. ``None`` otherwise (an older ``curve.csv``)."""
+    mine, theirs = point.get("outcomes"), other.get("outcomes")
+    if not mine or not theirs or set(mine) != set(theirs):
+        return None
+    cells = sorted(mine)
+    if any(len(mine[c]) != len(theirs[c]) for c in cells):
+        return None
+    return [o == "1" for c in cells for o in mine[c]], [o == "1" for c in cells for o in theirs[c]]
