@@ -77,7 +77,8 @@ def test_inspect_study_describes_the_plan_with_the_options_execution(tmp_path):
         runner.report_study(grid, options, "factorworld study")
     # nothing finished yet: refused in one line, and nothing written
     with pytest.raises(
-        ValueError, match=r"nothing to report: none of this study's 2 evaluations has finished in .*out; run the study"
+        ValueError,
+        match=r"nothing to report: none of this study's 2 evaluations \(learning-curve points included\) has finished in .*out; run",
     ):
         runner.report_study(grid, RunOptions(report_only=True), "factorworld study")
     assert not (tmp_path / "out").exists()

@@ -154,11 +154,11 @@ def report_study(cfg: StudyConfig, options: RunOptions, command: str) -> StudyOu
     if not options.report_only:
         raise ValueError("report_study writes the report of a study's finished steps: it needs report_only")
     plan, study_dir = make_plan(cfg), Path(cfg.out_dir)
-    finished = sum(1 for step in plan.evaluations() if is_done(step, study_dir))
-    if not finished:
+    evaluations = plan.evaluations() + plan.curve_points()  # a curve's points are reported before its grid's
+    if not any(is_done(step, study_dir) for step in evaluations):
         raise ValueError(
-            f"nothing to report: none of this study's {len(plan.evaluations())} evaluations has finished in "
-            f"{study_dir}; run the study first (the same command without report_only)"
+            f"nothing to report: none of this study's {len(evaluations)} evaluations (learning-curve points "
+            f"included) has finished in {study_dir}; run the study first (the same command without report_only)"
         )
     stale = stale_steps(plan, study_dir)
     check_not_stale(options, stale)
