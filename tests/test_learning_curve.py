@@ -133,8 +133,8 @@ def test_the_curve_section_gives_each_step_along_a_curve_and_each_method_against
 
 def test_points_holding_their_episodes_outcomes_are_compared_episode_by_episode():
     """Points with ``outcomes`` (the same episode seeds at every checkpoint and for every method) get Newcombe's
-    paired interval, over their cells' episodes in one order; a point without them, or whose cells differ, the
-    independent one, marked where the table has both kinds."""
+    paired interval over their cells' episodes in one order; points are compared on the cells both have, marked
+    where one has more; a cell without outcomes gets the independent interval, marked where a table has both."""
     early = "110000000000" + "0" * 18  # 2 of 30
     later = "111111000000" + "0" * 18  # 6 of 30: the two early successes again, and four more
     rows = [
@@ -146,25 +146,33 @@ def test_points_holding_their_episodes_outcomes_are_compared_episode_by_episode(
     independent = newcombe_independent(6, 30, 2, 30)
     assert diff == pytest.approx(independent[0]) == pytest.approx(4 / 30) and low > independent[1]  # narrower
     assert f"| b | its checkpoint before | t |  | {diff:+.2f} [{low:+.2f}, {high:+.2f}] |" in text
-    assert "95% interval for paired samples (episode by episode) (each on its own" in text and "indep." not in text
+    assert "95% interval for paired samples (episode by episode) (each on its own" in text
+    assert "indep." not in text and "†" not in text
     # a second cell (another seed) pairs its own episodes: 12 more, the later point losing one of its own
     second = [
-        {**r, "seed": 1, "outcomes": o, "successes": o.count("1")} for r, o in zip(rows, ("1" * 12, "1" * 11 + "0"))
+        {**r, "seed": 1, "episodes": 12, "outcomes": o, "successes": o.count("1")}
+        for r, o in zip(rows, ("1" * 12, "1" * 11 + "0"))
     ]
-    (point_8, point_16) = pooled_curve(rows + second)
-    assert point_8["outcomes"] == {("10", "0", ""): early, ("10", "1", ""): "1" * 12}
-    both = "\n".join(curve_section(rows + second, plotted=False, methods=["b"]))
+    (point_8, point_16) = pooled_curve(second + rows)  # cells in another order: paired by cell all the same
+    assert point_8["by_cell"] == {("10", "0", ""): (2, 30, early), ("10", "1", ""): (12, 12, "1" * 12)}
+    both = "\n".join(curve_section(second + rows, plotted=False, methods=["b"]))
     pooled = paired_gap([o == "1" for o in later + "1" * 11 + "0"], [o == "1" for o in early + "1" * 12])
     assert f"| {pooled[0]:+.2f} [{pooled[1]:+.2f}, {pooled[2]:+.2f}] |" in both
-    # a method against the first: paired on the cells both have; a method with other cells: independent, marked
+    # seed 1 still training at 16 epochs: the step is over seed 0 alone, marked, not pooled 8 against seed 0's 16
+    training = "\n".join(curve_section(rows + second[:1], plotted=False, methods=["b"]))
+    assert f"| {diff:+.2f} [{low:+.2f}, {high:+.2f}] † |" in training and "A difference marked † is over" in training
+    # a method against the first on the cells both have: paired at 8 epochs; at 16 a cell without outcomes, marked
     other = [{**r, "method": "a", "outcomes": "0" * 30, "successes": 0} for r in rows]
-    other[1] = {**other[1], "seed": 3}
+    other[1] = {**other[1], "outcomes": ""}
     mixed = "\n".join(curve_section(rows + other, plotted=False, methods=["b", "a"]))
     against_8 = paired_gap([False] * 30, [o == "1" for o in early])
     against_16 = newcombe_independent(0, 30, 6, 30)
     assert f"| a | b | t | {against_8[0]:+.2f} [{against_8[1]:+.2f}, {against_8[2]:+.2f}] | " in mixed
     assert f" | {against_16[0]:+.2f} [{against_16[1]:+.2f}, {against_16[2]:+.2f}] (indep.) |" in mixed
-    assert "or for two independent samples where a point lacks its episodes' outcomes (marked *indep.*)" in mixed
+    assert "or for two independent samples where a point lacks its episodes' outcomes" in mixed
+    # a method on another seed only: no cell in common, no difference
+    apart = [{**r, "method": "a", "seed": 3} for r in rows]
+    assert "| a | b | t |  |  |" in "\n".join(curve_section(rows + apart, plotted=False, methods=["b", "a"]))
     # without outcomes (an older curve.csv): the independent interval and the text it always had
     old = "\n".join(curve_section([{**r, "outcomes": ""} for r in rows], plotted=False, methods=["b"]))
     assert f"| {independent[0]:+.2f} [{independent[1]:+.2f}, {independent[2]:+.2f}] |" in old

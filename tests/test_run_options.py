@@ -94,6 +94,7 @@ def test_inspect_study_describes_the_plan_with_the_options_execution(tmp_path):
         ({"dry_run": True, "profile": True}, "dry_run, profile and fit_cost each inspect the study"),
         ({"push_to_hub": True}, "push_to_hub=true needs --hub_repo_id=<user>/<name>"),
         ({"report_only": True, "dry_run": True, "rerun_stale": True}, "runs nothing; dry_run, rerun_stale would run"),
+        ({"report_only": True, "reuse_from": ["elsewhere"]}, "reuse_from links other studies' steps into it only"),
     ],
 )
 def test_a_bad_option_is_refused_naming_the_valid_choices(options, message):

@@ -40,6 +40,7 @@ from .run.step import RUN_CONFIG_FILE
 from .run.steps import KINDS, Step, is_done
 
 LOCK_FILE = ".lock"
+REPORT_LOCK_FILE = ".report.lock"  # one writer of the study's outputs at a time: a run's end or a --report-only
 PLAN_FILE = "plan.json"
 
 
@@ -139,17 +140,19 @@ def run_study(cfg: StudyConfig, options: RunOptions | None = None, command: str 
         outcome.stale, outcome.set_aside = len(stale), set_aside
         if any(outcome.ran.values()):  # before the report, which states it
             record_run(study_dir, time.perf_counter() - start, options.workers, options.execution, outcome.ran)
-        outcome.results, outcome.report, outcome.plots = write_report(cfg, plan, study_dir, command)
+        with _lock(study_dir, REPORT_LOCK_FILE, wait=True):
+            outcome.results, outcome.report, outcome.plots = write_report(cfg, plan, study_dir, command)
         if options.push_to_hub:
             outcome.pushed = _push(options, outcome)
     return outcome
 
 
 def report_study(cfg: StudyConfig, options: RunOptions, command: str) -> StudyOutcome:
-    """``report_only``: the study's outputs written from its steps finished so far, nothing run. It takes no lock:
-    a run of the study in another process (which holds it) only ever adds finished steps, written whole, and
-    rewrites these outputs when it ends. Cached steps made by other code are named (refused under ``strict``)
-    as a run would."""
+    """``report_only``: the study's outputs written from its steps finished so far, nothing run. It does not take
+    the run's lock: a run of the study in another process (which holds it) only ever adds finished steps, written
+    whole. Writing the outputs takes the report lock, which a run's own report takes too, so the two never write
+    at once, and the later one reads every step the earlier one did. Cached steps made by other code are named
+    (refused under ``strict``) as a run would."""
     _check_grid(cfg)
     if not options.report_only:
         raise ValueError("report_study writes the report of a study's finished steps: it needs report_only")
@@ -164,9 +167,10 @@ def report_study(cfg: StudyConfig, options: RunOptions, command: str) -> StudyOu
     check_not_stale(options, stale)
     warn_stale(options, plan, study_dir, stale)
     outcome = StudyOutcome(study_dir)
-    for kind in KINDS:
-        outcome.cached[kind] = sum(1 for step in plan.of_kind(kind) if is_done(step, study_dir))
-    outcome.results, outcome.report, outcome.plots = write_report(cfg, plan, study_dir, command)
+    with _lock(study_dir, REPORT_LOCK_FILE, wait=True):
+        for kind in KINDS:
+            outcome.cached[kind] = sum(1 for step in plan.of_kind(kind) if is_done(step, study_dir))
+        outcome.results, outcome.report, outcome.plots = write_report(cfg, plan, study_dir, command)
     return outcome
 
 
@@ -272,15 +276,16 @@ def _blocked(pending: list[Step], failed: set[str]) -> list[Step]:
 
 
 class _lock:
-    """An exclusive lock on the study folder (a second concurrent run would race on the same steps)."""
+    """An exclusive lock on the study folder (a second concurrent run would race on the same steps), or, with
+    ``wait``, on one of its files that writers take in turn (the report's)."""
 
-    def __init__(self, study_dir: Path) -> None:
-        self.path = study_dir / LOCK_FILE
+    def __init__(self, study_dir: Path, name: str = LOCK_FILE, wait: bool = False) -> None:
+        self.path, self.wait = study_dir / name, wait
 
     def __enter__(self):
         self.file = open(self.path, "w")
         try:
-            fcntl.flock(self.file, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            fcntl.flock(self.file, fcntl.LOCK_EX | (0 if self.wait else fcntl.LOCK_NB))
         except BlockingIOError:
             self.file.close()
             raise FileExistsError(f"another run of this study is in progress ({self.path} is locked)") from None

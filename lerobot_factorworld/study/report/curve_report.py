@@ -7,11 +7,12 @@ Newcombe's interval."""
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 from ..metrics import newcombe_independent, paired_gap
-from ..results.curve import CURVE_FILE, MACHINES_SEPARATOR, paired_outcomes, pooled_curve
+from ..results.curve import CURVE_FILE, MACHINES_SEPARATOR, compare_points, pooled_curve
 from .markdown import ci, stage_row
 from .plots import draw_intervals, pyplot, save_figure
 
@@ -132,9 +133,9 @@ def _differences(
     by_line: dict[tuple[str, str], dict[float, dict]], epochs: list[float], methods: Sequence[str]
 ) -> list[str]:
     """The curve's differences, each with Newcombe's 95% interval on its own (not corrected for the others): a
-    description of where the curve moves, not a verdict. Paired (episode by episode) where both points hold their
-    episodes' outcomes, else for independent samples, marked where a table has both kinds. A step along a curve
-    is from the curve's own checkpoint before (methods may save at other epochs)."""
+    description of where the curve moves, not a verdict. Each is over the cells both points have, paired (episode
+    by episode) where both hold their episodes' outcomes, else for independent samples, marked where a table has
+    both kinds. A step along a curve is from the curve's own checkpoint before (methods may save at other epochs)."""
     rows = []
     for (method, task), points in by_line.items():
         own = sorted(points)
@@ -148,15 +149,17 @@ def _differences(
         if method != first[task]:
             base = by_line[(first[task], task)]
             rows.append((method, first[task], task, [_diff(points.get(e), base.get(e)) for e in epochs]))
-    kinds = {cell[1] for *_, cells in rows for cell in cells if cell}
-    if not kinds:
+    found = [cell for *_, cells in rows for cell in cells if cell]
+    if not found:
         return []
-    mixed = len(kinds) == 2
+    kinds = {cell.paired for cell in found}
+    subsets = any(cell.subset for cell in found)
 
-    def text(cell: tuple[str, bool] | None) -> str:
+    def text(cell: _Difference | None) -> str:
         if cell is None:
             return ""
-        return cell[0] + (" (indep.)" if mixed and not cell[1] else "")
+        marks = [" (indep.)"] if len(kinds) == 2 and not cell.paired else []
+        return cell.text + "".join(marks) + (SUBSET_MARK if cell.subset else "")
 
     return [
         "",
@@ -166,7 +169,7 @@ def _differences(
         f"method's (in the config's order) at the same epochs on the same task, with {_interval_text(kinds)} "
         "(each on its own, not corrected for the others: a description of where the curve moves, not a verdict). "
         "Like the table above, an interval holds the episodes' noise only, not the spread between training seeds, "
-        f"so between methods it can be too narrow{_pairing_text(kinds)}",
+        f"so between methods it can be too narrow{_pairing_text(kinds)}{SUBSET_TEXT if subsets else ''}",
         "",
         "| method | against | task | " + " | ".join(f"{e:g} epochs" for e in epochs) + " |",
         "|---|---|---|" + "---|" * len(epochs),
@@ -177,6 +180,14 @@ def _differences(
     ]
 
 
+SUBSET_MARK = " †"
+SUBSET_TEXT = (
+    " A difference marked † is over the cells (N, seed, widths) both points have: one of them has cells the other "
+    "lacks (a curve still training, or a method run on fewer cells), which it leaves out, so it is not the "
+    "difference of the two pooled points above."
+)
+
+
 def _interval_text(kinds: set[bool]) -> str:
     if kinds == {False}:
         return "Newcombe's 95% interval for two independent samples"
@@ -184,7 +195,7 @@ def _interval_text(kinds: set[bool]) -> str:
         return "Newcombe's 95% interval for paired samples (episode by episode)"
     return (
         "Newcombe's 95% interval for paired samples (episode by episode), or for two independent samples where a "
-        "point lacks its episodes' outcomes (marked *indep.*)"
+        "point lacks its episodes' outcomes or played another number of episodes (marked *indep.*)"
     )
 
 
@@ -201,17 +212,23 @@ def _pairing_text(kinds: set[bool]) -> str:
     )
 
 
-def _diff(point: dict | None, other: dict | None) -> tuple[str, bool] | None:
-    """``point`` minus ``other`` with its interval, and whether the interval is paired; ``None`` without both."""
-    if not point or not other:
+@dataclass(frozen=True)
+class _Difference:
+    text: str  # the difference and its interval
+    paired: bool
+    subset: bool  # over the cells both points have, fewer than one of them has
+
+
+def _diff(point: dict | None, other: dict | None) -> _Difference | None:
+    """``point`` minus ``other`` on the cells both have, with its interval; ``None`` without both."""
+    comparison = compare_points(point, other) if point and other else None
+    if comparison is None:
         return None
-    paired = paired_outcomes(point, other)
-    if paired is not None:
-        diff, low, high = paired_gap(*paired)
+    if comparison.paired:
+        diff, low, high = paired_gap(comparison.first, comparison.second)
     else:
-        k1, n1, k2, n2 = point["successes"], point["episodes"], other["successes"], other["episodes"]
-        diff, low, high = newcombe_independent(k1, n1, k2, n2)
-    return f"{diff:+.2f} {ci(low, high, 2)}", paired is not None
+        diff, low, high = newcombe_independent(*comparison.first, *comparison.second)
+    return _Difference(f"{diff:+.2f} {ci(low, high, 2)}", comparison.paired, comparison.subset)
 
 
 def plot_curve(rows: Sequence[dict[str, Any]], path: Path) -> bool:

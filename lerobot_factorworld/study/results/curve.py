@@ -8,6 +8,7 @@ from __future__ import annotations
 import math
 from collections import Counter, defaultdict
 from collections.abc import Sequence
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -137,8 +138,8 @@ def pooled_curve(rows: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
     """Per (method, task, epochs): the episodes and successes summed over N, seeds and widths, with the Wilson
     95% interval of the pooled rate (episodes of one checkpoint are independent given it; seeds add variance
     this interval does not hold, so it is a lower bound on the spread between seeds), the episodes per
-    furthest stage summed the same way (``{}`` where a row has no stage counts), and each cell's episode
-    outcomes by (N, seed, widths) (``None`` where a row has none), which pair two points' episodes."""
+    furthest stage summed the same way (``{}`` where a row has no stage counts), and each cell's successes,
+    episodes and episode outcomes by (N, seed, widths) (``by_cell``), from which two points are compared."""
     pooled: dict[tuple, list] = defaultdict(lambda: [0, 0, 0, Counter(), True, {}])
     for row in rows:
         point = pooled[(row["method"], row["task"], float(row["epochs"]))]
@@ -148,32 +149,53 @@ def pooled_curve(rows: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
         stages = parse_stage_counts(row.get("stages", ""))
         point[3].update(stages)
         point[4] = point[4] and bool(stages)
-        if point[5] is not None:
-            outcomes = row.get("outcomes", "")
-            point[5] = {**point[5], _paired_cell(row): outcomes} if outcomes else None
+        k, n, outcomes = point[5].get(_paired_cell(row), (0, 0, ""))  # a cell once per point, but for rows without one
+        point[5][_paired_cell(row)] = (k + row["successes"], n + row["episodes"], outcomes + row.get("outcomes", ""))
     out = []
-    for (method, task, epochs), (k, n, cells, stages, staged, outcomes) in sorted(pooled.items()):
+    for (method, task, epochs), (k, n, cells, stages, staged, by_cell) in sorted(pooled.items()):
         low, high = wilson_interval(k, n)
         out.append({"method": method, "task": task, "epochs": epochs, "cells": cells, "successes": k,
                     "episodes": n, "success_rate": k / n if n else math.nan, "ci_low": low, "ci_high": high,
-                    "stages": _in_task_order(task, stages) if staged else {}, "outcomes": outcomes})  # fmt: skip
+                    "stages": _in_task_order(task, stages) if staged else {}, "by_cell": by_cell})  # fmt: skip
     return out
 
 
 def _paired_cell(row: dict[str, Any]) -> tuple[str, ...]:
-    """What two points' cells must share for their episodes to pair (the same training environments and episode
-    seeds): N, seed and widths; the method and the checkpoint may differ."""
+    """What two points' cells must share to be compared (the same training environments and episode seeds): N,
+    seed and widths; the method and the checkpoint may differ."""
     return tuple(str(row.get(c, "")) for c in CELL[2:])
 
 
-def paired_outcomes(point: dict[str, Any], other: dict[str, Any]) -> tuple[list[bool], list[bool]] | None:
-    """Two pooled points' episode outcomes, episode by episode (cells in one order), when both hold every cell's
-    outcomes for the same cells with equal episode counts: the same episode seeds in the same environments, as a
-    study plays them at every checkpoint and for every method. ``None`` otherwise (an older ``curve.csv``)."""
-    mine, theirs = point.get("outcomes"), other.get("outcomes")
-    if not mine or not theirs or set(mine) != set(theirs):
+@dataclass(frozen=True)
+class Comparison:
+    """Two pooled points set side by side on the cells both have (:func:`compare_points`): episode by episode
+    (``paired``, ``first`` and ``second`` the outcomes) where every shared cell holds both points' outcomes for the
+    same number of episodes, else as two independent samples (``first`` and ``second`` are ``(successes,
+    episodes)``); ``subset`` when a point has cells the other lacks, which the comparison leaves out."""
+
+    paired: bool
+    subset: bool
+    first: Any
+    second: Any
+
+
+def compare_points(point: dict[str, Any], other: dict[str, Any]) -> Comparison | None:
+    """``point`` against ``other`` on the cells both have (``None`` without one): every checkpoint of a cell, and
+    every method's, plays the same episode seeds in the same training environments, so episode i pairs with
+    episode i where both points kept their outcomes (an older ``curve.csv`` did not)."""
+    mine, theirs = point.get("by_cell", {}), other.get("by_cell", {})
+    shared = sorted(set(mine) & set(theirs))
+    if not shared:
         return None
-    cells = sorted(mine)
-    if any(len(mine[c]) != len(theirs[c]) for c in cells):
-        return None
-    return [o == "1" for c in cells for o in mine[c]], [o == "1" for c in cells for o in theirs[c]]
+    subset = len(shared) < max(len(mine), len(theirs))
+    pairs = [(mine[c][2], theirs[c][2]) for c in shared]
+    whole = all(len(by_cell[c][2]) == by_cell[c][1] for by_cell in (mine, theirs) for c in shared)
+    if whole and all(a and len(a) == len(b) for a, b in pairs):
+        first = [o == "1" for a, _ in pairs for o in a]
+        return Comparison(True, subset, first, [o == "1" for _, b in pairs for o in b])
+    return Comparison(False, subset, _counts(mine, shared), _counts(theirs, shared))
+
+
+def _counts(by_cell: dict[tuple[str, ...], tuple[int, int, str]], cells: Sequence[tuple[str, ...]]) -> tuple[int, int]:
+    """``(successes, episodes)`` summed over ``cells``."""
+    return sum(by_cell[c][0] for c in cells), sum(by_cell[c][1] for c in cells)

@@ -101,6 +101,11 @@ class RunOptions:
                     f"report_only writes the report of the finished steps and runs nothing; {', '.join(clashing)} "
                     "would run or inspect: set one"
                 )
+            if self.reuse_from:
+                raise ValueError(
+                    "report_only reports the steps in the study's own folder; reuse_from links other studies' "
+                    "steps into it only when the study runs: drop it, or run the study"
+                )
         if self.push_to_hub:
             if not self.hub_repo_id and not self.model_repo_id:
                 raise ValueError(
