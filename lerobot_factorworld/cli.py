@@ -14,6 +14,7 @@ Commands:
     profile         an existing checkpoint under every factor, written as a study (--policy.path=DIR --task=TASK)
     report          regenerate a study's report.md and plots from its results.csv alone (--results=CSV)
     compare-gaps    one factor's gap in two studies and their difference (--first=DIR --second=DIR --factor=F --task=T)
+    compare-curves  two studies' learning curves at the checkpoints they share, and their difference (--first=DIR --second=DIR)
     compare-reruns  does a rerun land within the intervals of the results it repeats (--first=DIR --rerun=DIR)
     merge-results   a study made in parts (other machines, sessions) as one results.csv (--into=DIR --add=[DIR])
     pack            what a study needs to go on on another machine, copied into a folder (--study=DIR --out=DIR)
@@ -368,6 +369,61 @@ def cmd_compare_gaps(args: list[str]) -> None:
 
 
 @dataclass
+class CompareCurvesConfig:
+    """``factorworld compare-curves``: two studies' learning curves at the checkpoints they share, each P_T with
+    its Wilson 95% interval and their difference with Newcombe's (``study/results/compare_curves.py``): whether a
+    controlled run (one setting changed in a curve's recipe) moved P_T.
+
+    Attributes:
+        first: A study folder (or a committed ``docs/results/<study>``) holding ``curve.csv``.
+        second: Another.
+        match: Which checkpoints face each other: ``epochs`` (the same nominal epochs) or ``steps`` (the nearest
+            gradient step, within 5%: a run on twice the demos reaches a budget in half the epochs).
+        method: The first curve's method (default: its only one); also the second's unless ``second_method``.
+        second_method: The second curve's method, if another.
+        task: The task on both sides (default: each curve's only one).
+    """
+
+    first: str = ""
+    second: str = ""
+    match: str = "epochs"
+    method: str | None = None
+    second_method: str | None = None
+    task: str | None = None
+
+    def __post_init__(self) -> None:
+        from .study.results.compare_curves import MATCHES  # noqa: PLC0415 - the study stack loads only for this command
+        from .study.results.curve import CURVE_FILE  # noqa: PLC0415 - as above
+
+        for name in ("first", "second"):
+            if not getattr(self, name):
+                raise ValueError(f"compare-curves needs --{name}=<study folder holding {CURVE_FILE}>")
+            check_input_file(str(Path(getattr(self, name)) / CURVE_FILE), name)
+        if self.match not in MATCHES:
+            raise ValueError(f"unknown match {self.match!r}; valid: {', '.join(MATCHES)}")
+
+
+def cmd_compare_curves(args: list[str]) -> None:
+    # the study's config (LeRobot's policy checks, ~4 s) and statistics: only when this command runs
+    from .study.report.write import config_next_to, load_config  # noqa: PLC0415
+    from .study.results.compare_curves import CurveSide, curve_comparison_lines  # noqa: PLC0415
+    from .study.results.curve import CURVE_FILE, read_curve  # noqa: PLC0415
+    from .study.results.rows import RESULTS_FILE  # noqa: PLC0415
+
+    cfg = parse_config(CompareCurvesConfig, args, "compare-curves")
+    folders = [Path(cfg.first), Path(cfg.second)]
+    seeds = {load_config(config_next_to(folder / RESULTS_FILE)).eval.start_seed for folder in folders}
+    sides = [
+        CurveSide(str(folders[0]), read_curve(folders[0] / CURVE_FILE), cfg.method, cfg.task),
+        CurveSide(str(folders[1]), read_curve(folders[1] / CURVE_FILE), cfg.second_method or cfg.method, cfg.task),
+    ]
+    try:
+        print("\n".join(curve_comparison_lines(*sides, match=cfg.match, paired=len(seeds) == 1)))
+    except ValueError as err:  # a method, task or budget the curves lack: the command line was wrong
+        raise SettingError(str(err)) from None
+
+
+@dataclass
 class CompareRerunsConfig:
     """``factorworld compare-reruns``: every evaluation step two runs both made (same key), per cell the first
     run's successes with its Wilson 95% interval, the rerun's, whether the rerun lies within it and its gap within
@@ -603,6 +659,7 @@ COMMANDS: dict[str, Callable[[list[str]], None]] = {
     "profile": cmd_profile,
     "report": cmd_report,
     "compare-gaps": cmd_compare_gaps,
+    "compare-curves": cmd_compare_curves,
     "compare-reruns": cmd_compare_reruns,
     "merge-results": cmd_merge_results,
     "pack": cmd_pack,

@@ -7,12 +7,10 @@ Newcombe's interval."""
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from ..metrics import newcombe_independent, paired_gap
-from ..results.curve import CURVE_FILE, MACHINES_SEPARATOR, compare_points, pooled_curve
+from ..results.curve import CURVE_FILE, MACHINES_SEPARATOR, Difference, point_difference, pooled_curve
 from .markdown import ci, stage_row
 from .plots import draw_intervals, pyplot, save_figure
 
@@ -139,7 +137,7 @@ def _differences(
     rows = []
     for (method, task), points in by_line.items():
         own = sorted(points)
-        steps = {e: _diff(points[e], points[before]) for before, e in zip(own, own[1:])}
+        steps = {e: point_difference(points[e], points[before]) for before, e in zip(own, own[1:])}
         rows.append((method, "its checkpoint before", task, [steps.get(e) for e in epochs]))
     order = {name: i for i, name in enumerate(methods)}
     first: dict[str, str] = {}
@@ -148,18 +146,18 @@ def _differences(
     for (method, task), points in by_line.items():
         if method != first[task]:
             base = by_line[(first[task], task)]
-            rows.append((method, first[task], task, [_diff(points.get(e), base.get(e)) for e in epochs]))
+            rows.append((method, first[task], task, [point_difference(points.get(e), base.get(e)) for e in epochs]))
     found = [cell for *_, cells in rows for cell in cells if cell]
     if not found:
         return []
     kinds = {cell.paired for cell in found}
     subsets = any(cell.subset for cell in found)
 
-    def text(cell: _Difference | None) -> str:
+    def text(cell: Difference | None) -> str:
         if cell is None:
             return ""
         marks = [" (indep.)"] if len(kinds) == 2 and not cell.paired else []
-        return cell.text + "".join(marks) + (SUBSET_MARK if cell.subset else "")
+        return difference_text(cell) + "".join(marks) + (SUBSET_MARK if cell.subset else "")
 
     return [
         "",
@@ -178,6 +176,11 @@ def _differences(
             for method, against, task, cells in rows
         ),
     ]
+
+
+def difference_text(difference: Difference) -> str:
+    """``+0.17 [+0.01, +0.34]``: a difference of P_T and its interval, as the report's tables give them."""
+    return f"{difference.diff:+.2f} {ci(difference.low, difference.high, 2)}"
 
 
 SUBSET_MARK = " †"
@@ -210,25 +213,6 @@ def _pairing_text(kinds: set[bool]) -> str:
         ". Every checkpoint and method plays the same episode seeds in the same training environments, so episode i "
         f"of one point is paired with episode i of the other (their outcomes: `outcomes` in `{CURVE_FILE}`)."
     )
-
-
-@dataclass(frozen=True)
-class _Difference:
-    text: str  # the difference and its interval
-    paired: bool
-    subset: bool  # over the cells both points have, fewer than one of them has
-
-
-def _diff(point: dict | None, other: dict | None) -> _Difference | None:
-    """``point`` minus ``other`` on the cells both have, with its interval; ``None`` without both."""
-    comparison = compare_points(point, other) if point and other else None
-    if comparison is None:
-        return None
-    if comparison.paired:
-        diff, low, high = paired_gap(comparison.first, comparison.second)
-    else:
-        diff, low, high = newcombe_independent(*comparison.first, *comparison.second)
-    return _Difference(f"{diff:+.2f} {ci(low, high, 2)}", comparison.paired, comparison.subset)
 
 
 def plot_curve(rows: Sequence[dict[str, Any]], path: Path) -> bool:

@@ -15,7 +15,7 @@ from typing import Any
 from ...core import machine
 from ...core.io import atomic_write_text, read_table
 from ...protocol.conditions import TRAIN_SUITE
-from ..metrics import wilson_interval
+from ..metrics import newcombe_independent, paired_gap, wilson_interval
 from ..plan.config import StudyConfig
 from ..plan.grid import CURVE_EPOCHS, Plan
 from ..run.inputs import whole_epochs
@@ -199,3 +199,27 @@ def compare_points(point: dict[str, Any], other: dict[str, Any]) -> Comparison |
 def _counts(by_cell: dict[tuple[str, ...], tuple[int, int, str]], cells: Sequence[tuple[str, ...]]) -> tuple[int, int]:
     """``(successes, episodes)`` summed over ``cells``."""
     return sum(by_cell[c][0] for c in cells), sum(by_cell[c][1] for c in cells)
+
+
+@dataclass(frozen=True)
+class Difference:
+    """``point`` minus ``other`` (:func:`point_difference`) with Newcombe's 95% interval, paired or not, and whether
+    it leaves out cells one point has and the other lacks."""
+
+    diff: float
+    low: float
+    high: float
+    paired: bool
+    subset: bool
+
+
+def point_difference(point: dict[str, Any] | None, other: dict[str, Any] | None) -> Difference | None:
+    """Two pooled points' difference on the cells both have (:func:`compare_points`); ``None`` without both."""
+    comparison = compare_points(point, other) if point and other else None
+    if comparison is None:
+        return None
+    if comparison.paired:
+        diff, low, high = paired_gap(comparison.first, comparison.second)
+    else:
+        diff, low, high = newcombe_independent(*comparison.first, *comparison.second)
+    return Difference(diff, low, high, comparison.paired, comparison.subset)
