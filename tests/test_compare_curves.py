@@ -92,3 +92,21 @@ def test_the_command_reads_two_folders_and_pairs_only_studies_of_one_episode_see
     shutil.rmtree(folders["curve"])
     missing = run_main([*argv, f"--second={folders['curve']}"], main)
     assert missing.returncode == 2 and len(missing.stderr.strip().splitlines()) == 1 and "second" in missing.stderr
+
+
+def test_the_comparison_docs_rt1_quotes_is_what_the_command_prints_from_the_committed_curves(run_main):
+    """docs/rt1.md quotes ``compare-curves`` on two committed curves: its table rows are the command's own."""
+    from lerobot_factorworld.cli import main
+
+    results = ROOT / "docs" / "results"
+    argv = ["factorworld", "compare-curves", f"--first={results / 'rt1_pick_fixed_phrasing'}"]
+    printed = run_main([*argv, f"--second={results / 'rt1_curve_pick_160'}"], main)
+    assert printed.returncode == 0, printed.stderr
+    rows = [line for line in printed.stdout.splitlines() if line.startswith("| ") and "epochs (step)" not in line]
+    doc = (ROOT / "docs" / "rt1.md").read_text()
+    quoted = doc[doc.index("factorworld compare-curves --first=docs/results/rt1_pick_fixed_phrasing") :]
+    quoted = quoted[: quoted.index("\n```\n\n")]
+    assert (
+        rows and [line for line in quoted.splitlines() if line.startswith("| ") and "epochs (step)" not in line] == rows
+    )
+    assert "for paired samples" in printed.stdout  # both studies play the same episode seeds
