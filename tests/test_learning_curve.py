@@ -471,3 +471,22 @@ def test_the_curve_s_last_point_is_its_own_training_s_epochs(tmp_path):
         ("transformer", 1, 3, 1),
         ("transformer", 2, 6, 1),
     ]
+
+
+def test_a_report_of_a_curve_still_training_says_its_points_come_below(tmp_path):
+    """No grid evaluation yet (the grid's use the last checkpoint): the report says the curve below has its points so
+    far, and without a curve it says only that nothing has finished."""
+    from lerobot_factorworld.study.report.markdown import FAMILY_DETAILS, render
+
+    cfg = _command(tmp_path).grid()
+    rows = [{"method": "bc", "task": "handle-press", "epochs": 1, "successes": 1, "episodes": 2}]
+    curve = curve_section(rows, plotted=False, methods=["bc"], budgets={"bc": 3})
+
+    def sections(part: str) -> list[str]:
+        return curve if part == FAMILY_DETAILS else []
+
+    text = render(cfg, [], [], "factorworld study --report-only", planned=1, family_sections=sections)
+    assert "(0 of 1 evaluations finished)" in text and "Still training: bc has reached 1 of its 3 epochs" in text
+    assert "No evaluation of the grid has finished yet; the learning curve below has its points so far." in text
+    bare = render(cfg, [], [], "factorworld study", planned=1)
+    assert "No evaluation of the grid has finished yet." in bare and "learning curve" not in bare

@@ -143,7 +143,12 @@ def render(
         "",
     ]
     if not rows:
-        return "\n".join([*lines, "No evaluation has finished yet."]) + "\n" + "\n".join(details)
+        # a curve still training (the grid's evaluations use its last checkpoint): its points so far come below
+        curve = any(line.startswith("## Learning curve") for line in details)
+        waiting = "No evaluation of the grid has finished yet" + (
+            "; the learning curve below has its points so far.\n" if curve else "."
+        )
+        return "\n".join([*lines, waiting]) + "\n" + "\n".join(details)
     unequal = [r for r in rows if r["episodes"] % r["n_envs"] or r["envs_visited"] != r["n_envs"]]
     if unequal:
         lines += [f"**Coverage:** {len(unequal)} row(s) did not visit their environments equally.", ""]
