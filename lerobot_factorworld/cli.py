@@ -408,11 +408,10 @@ def cmd_compare_curves(args: list[str]) -> None:
     from .study.report.write import config_next_to, load_config  # noqa: PLC0415
     from .study.results.compare_curves import CurveSide, curve_comparison_lines  # noqa: PLC0415
     from .study.results.curve import CURVE_FILE, read_curve  # noqa: PLC0415
-    from .study.results.rows import RESULTS_FILE  # noqa: PLC0415
 
     cfg = parse_config(CompareCurvesConfig, args, "compare-curves")
     folders = [Path(cfg.first), Path(cfg.second)]
-    seeds = {load_config(config_next_to(folder / RESULTS_FILE)).eval.start_seed for folder in folders}
+    seeds = {load_config(config_next_to(Path(_results_file(str(folder))))).eval.start_seed for folder in folders}
     sides = [
         CurveSide(str(folders[0]), read_curve(folders[0] / CURVE_FILE), cfg.method, cfg.task),
         CurveSide(str(folders[1]), read_curve(folders[1] / CURVE_FILE), cfg.second_method or cfg.method, cfg.task),
