@@ -318,7 +318,6 @@ EXPECTED_SECONDS = {
     "tests/test_bc.py::test_lerobot_train_trains_the_head_and_not_the_frozen_encoder_then_lerobot_eval_without_its_weights_file[r3m_rn50]": 12.0,
     "tests/test_experts.py::test_expert_solves_default_and_each_physical_shift[basketball]": 11.0,
     "tests/test_bc.py::test_lerobot_train_trains_the_head_and_not_the_frozen_encoder_then_lerobot_eval_without_its_weights_file[clip_rn50]": 10.0,
-    "tests/test_experts.py::test_expert_solves_default_and_each_physical_shift[pick]": 10.0,
     "tests/test_pick.py::test_episodes_are_paired_across_conditions_even_when_a_shift_pins_the_object_position": 10.0,
     "tests/test_bench_scripts.py::test_bench_script_prints_consistent_rows_and_the_ratio_last[env]": 9.0,
     "tests/test_datasets.py::test_offline_push_fails_clearly_and_loses_nothing": 9.0,

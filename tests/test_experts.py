@@ -30,7 +30,9 @@ def run_expert(env, policy, seed, record=False, act=expert_action):
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("task", list(TASKS))
+# pick's expert is held to more (20 episodes per cell, 95%, every physical factor it supports and its language
+# conditions) by tests/test_pick.py::test_expert_succeeds_in_default_scenes_and_under_physical_shifts
+@pytest.mark.parametrize("task", [task for task in TASKS if task != "pick"])
 def test_expert_solves_default_and_each_physical_shift(task, make_env):
     per_env, required = STRICTER.get(task, (1, REQUIRED))
     episodes = ENVS * per_env  # episode seed % ENVS picks the environment, the seed the object start

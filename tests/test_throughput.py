@@ -110,6 +110,46 @@ def test_a_lent_loader_forks_fresh_workers_each_epoch_and_only_for_png_frames(tm
         assert stores_video(root) is video
 
 
+LOADER_CHILD = """
+import multiprocessing, sys, time
+from lerobot_factorworld.core.children import forked_children_die_with_this_process
+if sys.argv[1] == "die_with_parent":
+    assert forked_children_die_with_this_process()
+child = multiprocessing.get_context("fork").Process(target=time.sleep, args=(120,))
+child.start()
+print(child.pid, flush=True)
+time.sleep(120)
+"""
+
+
+def _running(pid: int) -> bool:
+    """Whether ``pid`` runs (a killed orphan may stay a zombie where nothing reaps it)."""
+    try:
+        return Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0] != "Z"
+    except FileNotFoundError:
+        return False
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="PR_SET_PDEATHSIG is Linux's")
+@pytest.mark.parametrize("mode", ["die_with_parent", "default"])
+def test_a_loader_forked_by_a_killed_worker_dies_with_it(mode):
+    """A worker killed with kill -9 (a lost Ray worker) takes the loader it forked with it, so no child keeps its
+    raylet connection open (``core/children.py``); without the request the orphan lives on (what it prevents)."""
+    worker = subprocess.Popen([sys.executable, "-c", LOADER_CHILD, mode], stdout=subprocess.PIPE, text=True)
+    child = int(worker.stdout.readline())
+    assert _running(child)
+    worker.kill()
+    worker.wait()
+    deadline = time.time() + (10 if mode == "die_with_parent" else 0.3)
+    while _running(child) and time.time() < deadline:
+        time.sleep(0.02)
+    try:
+        assert _running(child) is (mode == "default")
+    finally:
+        if _running(child):
+            os.kill(child, 9)
+
+
 def test_a_process_with_another_thread_is_not_forked():
     import threading
 

@@ -36,6 +36,7 @@ from typing import Any
 
 from ... import __version__  # the package root registers the env and policy types (in a fresh worker too)
 from ...core import machine, provenance
+from ...core.children import forked_children_die_with_this_process
 from ...core.fingerprint import folder_fingerprint
 from ...core.io import atomic_write_text
 from ...core.memory import keep_freed_memory
@@ -630,6 +631,7 @@ def _train_in_process(args: list[str], folder: Path, threads: int, timings: Timi
         from lerobot.scripts import lerobot_train  # noqa: PLC0415 - LeRobot's training stack (seconds, once)
 
     print("lerobot-train (in process) " + " ".join(args), flush=True)
+    forked_children_die_with_this_process()  # a killed worker's loaders must not keep its Ray connection open
     try:
         with (
             as_lerobot_process("lerobot-train", args, folder, threads),
