@@ -14,6 +14,8 @@ One renderer, two ways in, so a documented number can always be recomputed from 
 
 from __future__ import annotations
 
+import copy
+import functools
 import json
 import shutil
 from collections.abc import Sequence
@@ -198,8 +200,9 @@ def finding_companions(cfg: StudyConfig, study_dir: Path) -> list[tuple[StudyCon
 
 
 def _finding_of(config: Path) -> str:
-    """The ``finding`` a study config names, read without parsing the whole study (most siblings name none)."""
-    settings = yaml.safe_load(config.read_text(encoding="utf-8"))
+    """The ``finding`` a study config names, read without parsing the whole study (most siblings name none), by
+    libyaml where PyYAML has it (every report of a finding reads each sibling's config)."""
+    settings = yaml.load(config.read_text(encoding="utf-8"), Loader=getattr(yaml, "CSafeLoader", yaml.SafeLoader))
     return str(settings.get("finding") or "") if isinstance(settings, dict) else ""
 
 
@@ -220,7 +223,18 @@ def load_config(path: str | Path) -> StudyConfig:
 
     Its ``reuse_from`` is left out: where finished steps were linked from is how a study ran on one machine,
     not what it computed (a step's key is its inputs), and those folders need not exist where a report is
-    regenerated."""
+    regenerated. A file read before and unchanged since is not parsed again (a finding's every report reads
+    its siblings' configs: ``factorworld sync-docs`` would parse each of them once per sibling)."""
+    file = Path(path).expanduser()
+    if not file.is_file():
+        return _parsed_config(str(path))  # the parser's own one-line refusal
+    stat = file.resolve().stat()
+    return copy.deepcopy(_parsed_config(str(file.resolve()), stat.st_mtime_ns, stat.st_size))
+
+
+@functools.lru_cache(maxsize=128)
+def _parsed_config(path: str, mtime_ns: int = 0, size: int = 0) -> StudyConfig:
+    """``path`` parsed (``mtime_ns`` and ``size`` only key the cache: a changed file is parsed again)."""
     return parse_config(StudyCommand, [f"--config_path={path}", f"--{REUSE_SETTING}=[]"], "study").grid()
 
 

@@ -285,9 +285,25 @@ class FactorGapBootstrap:
         factors by its own mean gaps); NaN if rho is mostly undefined."""
         if not self.names:
             return math.nan, math.nan
-        ranks = (rank_hardest_first(dict(zip(self.names, rep.tolist()))) for rep in self.reps)
-        lo, hi = percentile_interval(np.array([spearman(rank, reference) for rank in ranks]))
+        rho = spearman_with(reference)
+        lo, hi = percentile_interval(
+            np.array([rho(rank_hardest_first(dict(zip(self.names, rep.tolist())))) for rep in self.reps])
+        )
         return float(lo), float(hi)
+
+
+def spearman_with(reference: Mapping[str, float]) -> Callable[[Mapping[str, float]], float]:
+    """:func:`spearman` of a ranking with ``reference``, computed once per distinct ranking (its items in order,
+    so a repeat gives the same float): a bootstrap's thousands of replicates repeat a few orderings."""
+    seen: dict[tuple, float] = {}
+
+    def rho(ranks: Mapping[str, float]) -> float:
+        key = tuple(ranks.items())
+        if key not in seen:
+            seen[key] = spearman(ranks, reference)
+        return seen[key]
+
+    return rho
 
 
 def factor_gap_bootstrap(rows: Sequence[dict], method: str, factors: Sequence[str]) -> FactorGapBootstrap:
@@ -687,9 +703,11 @@ def method_rho_differences(
     train = table.train_columns()
     point, reps = table.bootstrap(lambda r, n: group_mean(cell_gaps(r, train), groups))
 
+    rho_of = spearman_with(reference)
+
     def rho(gaps: np.ndarray) -> np.ndarray:  # (..., M * F) -> (..., M)
         flat = gaps.reshape(-1, len(methods), len(shared))
-        out = [[spearman(rank_hardest_first(dict(zip(shared, g.tolist()))), reference) for g in row] for row in flat]
+        out = [[rho_of(rank_hardest_first(dict(zip(shared, g.tolist())))) for g in row] for row in flat]
         return np.array(out).reshape(*gaps.shape[:-1], len(methods))
 
     p, r = rho(point), rho(reps)
