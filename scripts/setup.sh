@@ -17,11 +17,13 @@ fi
 "$PYTHON" -m uv --version >/dev/null 2>&1 || "$PYTHON" -m pip install --quiet uv
 export UV_PYTHON_DOWNLOADS=never  # uv must use this interpreter, it cannot download one
 [ -x .venv/bin/python ] || "$PYTHON" -m uv venv --quiet .venv -p "$PYTHON"
-# --compile-bytecode: some machines set PYTHONDONTWRITEBYTECODE, and then every process would recompile
-# torch, transformers and LeRobot from source (~10 s per import of LeRobot).
-"$PYTHON" -m uv pip install --quiet --compile-bytecode -p .venv/bin/python -e ".[dev]"
-# The editable package itself too (uv compiles site-packages only): the tests start hundreds of processes.
-.venv/bin/python -m compileall -q lerobot_factorworld
+"$PYTHON" -m uv pip install --quiet -p .venv/bin/python -e ".[dev]"
+# This venv writes bytecode even where PYTHONDONTWRITEBYTECODE is set (some machines set it): without it every
+# process would compile torch, transformers and LeRobot from source again (~10 s per import of LeRobot). Each
+# module is compiled at its first import, so only what runs is compiled: compiling all of site-packages up front
+# (uv's --compile-bytecode) took ~85 s of CPU, most of it for modules nothing here imports.
+SITE=$(.venv/bin/python -c 'import sysconfig; print(sysconfig.get_paths()["purelib"])')
+echo "import sys; sys.dont_write_bytecode = False" > "$SITE/_factorworld_write_bytecode.pth"
 
 # FFmpeg shared libraries let torchcodec load (otherwise every process prints a long traceback).
 if ! ldconfig -p 2>/dev/null | grep -q libavcodec; then
