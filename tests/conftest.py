@@ -288,51 +288,50 @@ def factorworld_checkpoint(build_once) -> Path:
 
 # --- scheduling --------------------------------------------------------------------------------------
 
-# Seconds a test (or an xdist group, summed) took in a full run (`pytest -n auto --durations=40`, 2026-11-26, on
-# the idle 2 cores; each worker and its processes capped to one thread by pytest_configure; the first in-process
-# `lerobot-train` / `lerobot-eval` of a worker pays its imports, the others about none); a
-# test not listed counts as SLOW_DEFAULT when marked slow, else 0 (kept in file order after the listed ones). Only
-# the order depends on these numbers: update them when a test becomes one of the longest.
+# Seconds a test (or an xdist group, summed) took in a full run (`pytest -n 2 --durations=100`, 2026-12-07, on the
+# idle 2 cores of an AMD EPYC; each worker and its processes capped to one thread by pytest_configure; the first
+# in-process `lerobot-train` / `lerobot-eval` of a worker pays its imports, the others about none); a test not listed
+# counts as SLOW_DEFAULT when marked slow, else 0 (kept in file order after the listed ones). Only the order depends
+# on these numbers: update them when a test becomes one of the longest.
 EXPECTED_SECONDS = {
+    "train_resume": 145.0,  # tests/test_train_resume.py: a killed study, a lost Ray worker (one Ray start), a pack
     "toy_study": 90.0,  # the xdist group of tests/test_study.py's toy study (local, rerun, reuse, a part on Ray)
-    "train_resume": 125.0,  # tests/test_train_resume.py: a killed study, a lost Ray worker (one Ray start), a pack
-    "tests/test_train_extend.py::test_ten_epochs_continued_to_twenty_give_the_checkpoint_files_of_twenty_from_scratch": 32.0,
-    "tests/test_lerobot_metaworld_obs.py::test_round_trip_from_lerobots_own_metaworld_data": 128.0,
-    "tests/test_throughput.py::test_bench_study_quick_runs_both_executions_with_identical_results": 69.0,
-    "tests/test_bench_scripts.py::test_bench_script_prints_consistent_rows_and_the_ratio_last[collect]": 54.0,
-    "tests/test_bench_scripts.py::test_bench_script_prints_consistent_rows_and_the_ratio_last[bc]": 46.0,
-    "tests/test_pick.py::test_expert_succeeds_in_default_scenes_and_under_physical_shifts": 28.0,
-    "tests/test_lerobot_metaworld_obs.py::test_the_docs_comparison_script_finds_lerobots_frames_and_states": 26.0,
-    "tests/test_datasets.py::test_lerobot_train_runs_on_the_collected_dataset": 16.0,  # its dataset fixture: 12
-    "tests/test_datasets.py::test_killed_collection_resumes_without_duplicates": 24.0,
-    "tests/test_rerun.py::test_the_cpu_fingerprint_hashes_each_layer_and_a_oneDNN_cap_leaves_pixels_and_physics_alone": 23.0,
-    "tests/test_pick.py::test_held_out_objects_and_phrasings_never_appear_in_training_environments": 21.0,
-    "tests/test_experts.py::test_expert_solves_default_and_each_physical_shift[bin-picking]": 20.0,
-    "tests/test_experts.py::test_expert_solves_default_and_each_physical_shift[pick-place]": 19.0,
-    "tests/test_pick.py::test_rt1_trains_across_instructions_and_lerobot_eval_reports_every_condition": 16.0,
-    "tests/test_profile.py::test_profile_of_a_lerobot_metaworld_checkpoint": 16.0,
-    "tests/test_rt1.py::test_lerobot_train_lowers_the_loss_and_lerobot_eval_runs_the_checkpoint": 15.0,
-    "tests/test_compat.py::test_dataset_sidecars_are_byte_identical[sidecar_door-open.json]": 15.0,
-    "tests/test_compat.py::test_dataset_sidecars_are_byte_identical[sidecar_pick.json]": 15.0,
-    "tests/test_profile.py::test_profile_writes_a_studys_outputs_without_collecting_or_training": 13.0,
-    "tests/test_bc.py::test_lerobot_train_trains_the_head_and_not_the_frozen_encoder_then_lerobot_eval_without_its_weights_file[r3m_rn50]": 12.0,
+    "tests/test_lerobot_metaworld_obs.py::test_round_trip_from_lerobots_own_metaworld_data": 85.0,
+    "tests/test_throughput.py::test_bench_study_quick_runs_both_executions_with_identical_results": 60.0,
+    "tests/test_bench_scripts.py::test_bench_script_prints_consistent_rows_and_the_ratio_last[collect]": 51.0,
+    "tests/test_docs_results.py::test_every_committed_report_and_fenced_docs_table_is_what_its_results_csv_regenerates": 37.0,
+    "tests/test_named_studies.py::test_a_wheel_in_a_fresh_environment_runs_a_study_by_name_and_lerobot_finds_the_env": 32.0,
+    "tests/test_bench_scripts.py::test_bench_script_prints_consistent_rows_and_the_ratio_last[bc]": 26.0,
+    "tests/test_datasets.py::test_killed_collection_resumes_without_duplicates": 25.0,
+    "tests/test_learning_curve.py::test_a_study_with_a_curve_evaluates_each_checkpoint_and_reports_it": 24.0,
+    "tests/test_train_extend.py::test_ten_epochs_continued_to_twenty_give_the_checkpoint_files_of_twenty_from_scratch": 22.0,
+    "tests/test_bench_scripts.py::test_bench_script_prints_consistent_rows_and_the_ratio_last[malloc]": 21.0,
+    "tests/test_rerun.py::test_the_cpu_fingerprint_hashes_each_layer_and_a_oneDNN_cap_leaves_pixels_and_physics_alone": 21.0,
+    "tests/test_pick.py::test_expert_succeeds_in_default_scenes_and_under_physical_shifts": 21.0,
+    "tests/test_profile.py::test_profile_writes_a_studys_outputs_without_collecting_or_training": 20.0,
+    "tests/test_stopping_benchmarks.py::test_a_committed_output_is_what_its_commands_print[stopping_power.txt]": 18.0,
+    "tests/test_pick.py::test_held_out_objects_and_phrasings_never_appear_in_training_environments": 16.0,
+    "tests/test_profile.py::test_profile_of_a_lerobot_metaworld_checkpoint": 15.0,
+    "tests/test_pick.py::test_rt1_trains_across_instructions_and_lerobot_eval_reports_every_condition": 15.0,
+    "tests/test_experts.py::test_expert_solves_default_and_each_physical_shift[pick-place]": 13.0,
+    "tests/test_bench_scripts.py::test_bench_frame_cache_reads_the_same_samples_faster_and_prints_the_ratio": 13.0,
+    "tests/test_bc.py::test_checkpoint_reloads_after_its_weights_file_is_deleted[clip_rn50]": 12.0,
+    "tests/test_lerobot_metaworld_obs.py::test_the_docs_comparison_script_finds_lerobots_frames_and_states": 12.0,
+    "tests/test_study_devices.py::test_a_study_on_cuda_is_refused_in_one_line_before_any_step_runs": 11.0,
     "tests/test_experts.py::test_expert_solves_default_and_each_physical_shift[basketball]": 11.0,
-    "tests/test_bc.py::test_lerobot_train_trains_the_head_and_not_the_frozen_encoder_then_lerobot_eval_without_its_weights_file[clip_rn50]": 10.0,
-    "tests/test_pick.py::test_episodes_are_paired_across_conditions_even_when_a_shift_pins_the_object_position": 10.0,
-    "tests/test_bench_scripts.py::test_bench_script_prints_consistent_rows_and_the_ratio_last[env]": 9.0,
+    "tests/test_compare_gaps.py::test_the_command_prints_the_differences_findings_quotes_and_refuses_in_one_line": 11.0,
+    "tests/test_experts.py::test_expert_solves_default_and_each_physical_shift[bin-picking]": 9.0,
     "tests/test_datasets.py::test_offline_push_fails_clearly_and_loses_nothing": 9.0,
-    # Marked slow by issue 43 (or their workload changed), measured 2026-11-27 with `-n 0` on 2 cores shared with a
-    # running study: rough, and longer than the idle numbers above by up to about 1.5x.
-    "tests/test_docs_results.py::test_every_committed_report_and_fenced_docs_table_is_what_its_results_csv_regenerates": 44.0,
-    "tests/test_bench_scripts.py::test_bench_script_prints_consistent_rows_and_the_ratio_last[policy]": 43.0,
-    "tests/test_bench_scripts.py::test_bench_script_prints_consistent_rows_and_the_ratio_last[malloc]": 26.0,
-    "tests/test_renderer.py::test_an_env_left_open_at_exit_prints_nothing": 22.0,
-    "tests/test_compare_gaps.py::test_the_command_prints_the_differences_findings_quotes_and_refuses_in_one_line": 22.0,
-    "tests/test_bc.py::test_checkpoint_reloads_after_its_weights_file_is_deleted[clip_rn50]": 19.0,
-    "tests/test_docs_results.py::test_the_sync_script_rewrites_fenced_tables_and_check_finds_stale_ones": 16.0,
-    "tests/test_bc.py::test_feature_cache_gives_the_same_loss_and_is_dropped_on_load": 16.0,
-    "tests/test_bc.py::test_clip_loading_is_strict_and_lists_the_bad_keys": 15.0,
-    "tests/test_datasets.py::test_full_disk_keeps_finished_shards_and_a_rerun_completes": 11.0,
+    "tests/test_renderer.py::test_an_env_left_open_at_exit_prints_nothing": 9.0,
+    "tests/test_bench_scripts.py::test_bench_script_prints_consistent_rows_and_the_ratio_last[policy]": 9.0,
+    "tests/test_named_studies.py::test_factorworld_configs_lists_every_name_with_its_cost": 8.0,
+    "tests/test_docs_results.py::test_report_command_regenerates_report_and_plots_from_a_results_csv_alone": 8.0,
+    "tests/test_rt1.py::test_lerobot_train_lowers_the_loss_and_lerobot_eval_runs_the_checkpoint": 8.0,
+    "tests/test_html_report.py::test_report_html_in_headless_chromium": 8.0,
+    "tests/test_datasets.py::test_several_tasks_in_one_video_dataset_and_append": 8.0,
+    "tests/test_datasets.py::test_full_disk_keeps_finished_shards_and_a_rerun_completes": 7.0,
+    "tests/test_experts.py::test_expert_solves_default_and_each_physical_shift[window-close]": 7.0,
+    "tests/test_experts.py::test_expert_solves_default_and_each_physical_shift[window-open]": 7.0,
 }
 SLOW_DEFAULT = 10.0
 
