@@ -2,6 +2,7 @@
 points matched by epochs or by gradient step, each difference paired episode by episode where both points kept
 their outcomes and the studies share their episode seeds, bad input refused in one line naming the choices."""
 
+import re
 import shutil
 from pathlib import Path
 
@@ -94,19 +95,20 @@ def test_the_command_reads_two_folders_and_pairs_only_studies_of_one_episode_see
     assert missing.returncode == 2 and len(missing.stderr.strip().splitlines()) == 1 and "second" in missing.stderr
 
 
-def test_the_comparison_docs_rt1_quotes_is_what_the_command_prints_from_the_committed_curves(run_main):
-    """docs/rt1.md quotes ``compare-curves`` on two committed curves: its table rows are the command's own."""
+def test_the_comparisons_docs_rt1_quotes_are_what_the_command_prints_from_the_committed_curves(run_main):
+    """docs/rt1.md quotes ``compare-curves`` on committed curves: each quoted block's table rows are the command's own."""
     from lerobot_factorworld.cli import main
 
-    results = ROOT / "docs" / "results"
-    argv = ["factorworld", "compare-curves", f"--first={results / 'rt1_pick_fixed_phrasing'}"]
-    printed = run_main([*argv, f"--second={results / 'rt1_curve_pick_160'}"], main)
-    assert printed.returncode == 0, printed.stderr
-    rows = [line for line in printed.stdout.splitlines() if line.startswith("| ") and "epochs (step)" not in line]
     doc = (ROOT / "docs" / "rt1.md").read_text()
-    quoted = doc[doc.index("factorworld compare-curves --first=docs/results/rt1_pick_fixed_phrasing") :]
-    quoted = quoted[: quoted.index("\n```\n\n")]
-    assert (
-        rows and [line for line in quoted.splitlines() if line.startswith("| ") and "epochs (step)" not in line] == rows
-    )
-    assert "for paired samples" in printed.stdout  # both studies play the same episode seeds
+    quotes = re.findall(r"```bash\n(factorworld compare-curves [^\n]+)\n```\n```\n(.*?)\n```\n", doc, re.S)
+    assert len(quotes) >= 2, "docs/rt1.md quotes the language's and the demos' comparisons"
+    for command, quoted in quotes:
+        argv = [arg.replace("docs/results", str(ROOT / "docs" / "results")) for arg in command.split()]
+        printed = run_main(argv, main)
+        assert printed.returncode == 0, printed.stderr
+        rows = [line for line in printed.stdout.splitlines() if line.startswith("| ") and "epochs (step)" not in line]
+        assert (
+            rows
+            and [line for line in quoted.splitlines() if line.startswith("| ") and "epochs (step)" not in line] == rows
+        ), command
+        assert "for paired samples" in printed.stdout  # both studies play the same episode seeds
