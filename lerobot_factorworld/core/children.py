@@ -16,20 +16,21 @@ import functools
 import os
 import signal
 import sys
+from collections.abc import Callable
 
 PR_SET_PDEATHSIG = 1  # prctl(2)
-_forking: list[int] = []  # the pid of the process that is forking, set just before each fork
+_parent = 0  # the pid of the process that is forking, set just before each fork
 
 
 def _remember_parent() -> None:
-    _forking[:] = [os.getpid()]
+    global _parent
+    _parent = os.getpid()
 
 
-def _die_with_parent() -> None:
+def _die_with(prctl: Callable[..., int]) -> None:
     """In a just-forked child: ask for SIGKILL when the parent dies; if it died before the request, die now."""
-    libc = ctypes.CDLL(None, use_errno=True)
-    libc.prctl(PR_SET_PDEATHSIG, signal.SIGKILL, 0, 0, 0)
-    if _forking and os.getppid() != _forking[0]:
+    prctl(PR_SET_PDEATHSIG, signal.SIGKILL, 0, 0, 0)
+    if os.getppid() != _parent:
         os._exit(1)
 
 
@@ -41,5 +42,6 @@ def forked_children_die_with_this_process() -> bool:
     descriptors)."""
     if not sys.platform.startswith("linux"):
         return False
-    os.register_at_fork(before=_remember_parent, after_in_child=_die_with_parent)
+    prctl = ctypes.CDLL(None, use_errno=True).prctl  # looked up once, not in every child (a loader per epoch)
+    os.register_at_fork(before=_remember_parent, after_in_child=functools.partial(_die_with, prctl))
     return True

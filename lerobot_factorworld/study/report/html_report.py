@@ -425,11 +425,8 @@ def _plotly(div_id: str, traces: list[dict], layout: dict, height: int) -> str:
     expanded), without building the figure: Plotly's validation of every property took most of a report's time."""
     import plotly.io as pio  # noqa: PLC0415 - deliberately here: only writing report.html needs Plotly
 
-    figure = {
-        "data": [_plotly_trace(trace) for trace in traces],
-        "layout": {**_sorted_keys({"margin": {"t": 40, "r": 20}, **layout}), "template": _plotly_template()},
-    }
-    figure["layout"] = dict(sorted(figure["layout"].items()))
+    layout = {**_sorted_keys({"margin": {"t": 40, "r": 20}, **layout}), "template": _plotly_template()}
+    figure = {"data": [_plotly_trace(trace) for trace in traces], "layout": dict(sorted(layout.items()))}
     return pio.to_html(
         figure,
         validate=False,

@@ -225,11 +225,11 @@ def load_config(path: str | Path) -> StudyConfig:
     not what it computed (a step's key is its inputs), and those folders need not exist where a report is
     regenerated. A file read before and unchanged since is not parsed again (a finding's every report reads
     its siblings' configs: ``factorworld sync-docs`` would parse each of them once per sibling)."""
-    file = Path(path).expanduser()
+    file = Path(path).expanduser().resolve()
     if not file.is_file():
         return _parsed_config(str(path))  # the parser's own one-line refusal
-    stat = file.resolve().stat()
-    return copy.deepcopy(_parsed_config(str(file.resolve()), stat.st_mtime_ns, stat.st_size))
+    stat = file.stat()
+    return copy.deepcopy(_parsed_config(str(file), stat.st_mtime_ns, stat.st_size))
 
 
 @functools.lru_cache(maxsize=128)
