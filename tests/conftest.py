@@ -57,10 +57,10 @@ def pytest_configure(config):
 
 
 def pytest_xdist_auto_num_workers(config) -> int:
-    """``-n auto`` starts one worker more than there are CPUs. About a sixth of a worker's time in this suite is
-    spent waiting, not computing (processes starting, Ray, a killed study restarting): a third worker on 2 cores
-    fills it (each worker capped at one thread, above). Measured side by side on 2 cores of an AMD EPYC
-    (2026-12-07): 585 s with 3 workers, 678 s with 2."""
+    """``-n auto`` starts one worker more than there are CPUs: with one per CPU about an eighth of the CPUs' time
+    in this suite went unused (processes starting, Ray, a killed study restarting), which a third worker on 2
+    cores partly fills (each worker capped at one thread, above). A fresh clone's suite on 2 idle cores of an AMD
+    EPYC: 594 s with 3 workers (2026-12-07), 609 s with 2 the day before (not side by side)."""
     return len(os.sched_getaffinity(0)) + 1
 
 
@@ -326,7 +326,6 @@ EXPECTED_SECONDS = {
     "tests/test_bench_scripts.py::test_bench_frame_cache_reads_the_same_samples_faster_and_prints_the_ratio": 13.0,
     "tests/test_bc.py::test_checkpoint_reloads_after_its_weights_file_is_deleted[clip_rn50]": 12.0,
     "tests/test_lerobot_metaworld_obs.py::test_the_docs_comparison_script_finds_lerobots_frames_and_states": 12.0,
-    "tests/test_study_devices.py::test_a_study_on_cuda_is_refused_in_one_line_before_any_step_runs": 11.0,
     "tests/test_experts.py::test_expert_solves_default_and_each_physical_shift[basketball]": 11.0,
     "tests/test_compare_gaps.py::test_the_command_prints_the_differences_findings_quotes_and_refuses_in_one_line": 11.0,
     "tests/test_experts.py::test_expert_solves_default_and_each_physical_shift[bin-picking]": 9.0,

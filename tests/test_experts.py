@@ -1,20 +1,25 @@
 """Meta-World's scripted experts solve every task in the default scene and under each applicable
-physical single-factor shift (>= 90% over 10 seeded episodes, 10 sampled environments per cell;
-pick-place, the paper's main task, >= 95% over 20 episodes, two object starts per environment), and
-visual factors leave the physics exactly unchanged."""
+physical single-factor shift (one seeded episode per sampled environment, at most one failing per cell: >= 90%
+of 10 environments for the tasks a packaged study collects, >= 80% of 5 for the others; pick-place, the paper's main task, >= 95% over 20
+episodes, two object starts per environment), and visual factors leave the physics exactly unchanged."""
 
 import dataclasses
 
 import numpy as np
 import pytest
+import yaml
 
 from lerobot_factorworld import TASKS, FactorValues, SceneConfig
 from lerobot_factorworld.experts import expert_action, expert_policy, rollout
 from lerobot_factorworld.factors.registry import FACTORS, supported_factors
 from lerobot_factorworld.protocol.sampling import sample_configs
+from lerobot_factorworld.study.plan.named import STUDIES_DIR
 
-ENVS = 10  # sampled environments per cell
-REQUIRED = 0.9
+ENVS, REQUIRED = 10, 0.9  # sampled environments per cell for the tasks a packaged study collects
+# The other tasks: 5 environments per cell (every physical factor still sampled), one of which may fail. Halves the
+# suite's slowest physics (Meta-World's per-step observation code, not rendering) where no committed result rests on it.
+OTHER_ENVS, OTHER_REQUIRED = 5, 0.8
+STUDIED = {task for path in STUDIES_DIR.rglob("*.yaml") for task in yaml.safe_load(path.read_text())["tasks"]}
 STRICTER = {"pick-place": (2, 0.95)}  # task -> (episodes per environment, required success rate)
 NOISE = 0.002
 PHYSICAL = [name for name, spec in FACTORS.items() if not spec.visual]
@@ -34,15 +39,16 @@ def run_expert(env, policy, seed, record=False, act=expert_action):
 # conditions) by tests/test_pick.py::test_expert_succeeds_in_default_scenes_and_under_physical_shifts
 @pytest.mark.parametrize("task", [task for task in TASKS if task != "pick"])
 def test_expert_solves_default_and_each_physical_shift(task, make_env):
-    per_env, required = STRICTER.get(task, (1, REQUIRED))
-    episodes = ENVS * per_env  # episode seed % ENVS picks the environment, the seed the object start
+    envs, required = (ENVS, REQUIRED) if task in STUDIED else (OTHER_ENVS, OTHER_REQUIRED)
+    per_env, required = STRICTER.get(task, (1, required))
+    episodes = envs * per_env  # episode seed % envs picks the environment, the seed the object start
     policy = expert_policy(task)
     cells = {"default": [SceneConfig(task)]}
     for name in PHYSICAL:
         if name in supported_factors(task) and name != "object_pos":
-            cells[name] = sample_configs(task, ENVS, seed=11, factors=(name,))
+            cells[name] = sample_configs(task, envs, seed=11, factors=(name,))
     # object position: the default cell re-samples it per episode; also pin the default range's draws
-    cells["object_pos"] = sample_configs(task, ENVS, seed=11, factors=("object_pos",))
+    cells["object_pos"] = sample_configs(task, envs, seed=11, factors=("object_pos",))
     failures = {}
     for cell, configs in cells.items():
         env = make_env(task, configs, cameras=(), scene_cache_size=len(configs))

@@ -6,13 +6,12 @@ CUDA: on a GPU machine every grouped training then failed with "Cannot re-initia
 from __future__ import annotations
 
 import json
-import subprocess
-import sys
 from pathlib import Path
 
 import pytest
 import torch
 
+from lerobot_factorworld.cli import main
 from lerobot_factorworld.study.plan.config import StudyConfig
 from lerobot_factorworld.study.run.steps import device_problem, require_device
 
@@ -54,7 +53,7 @@ def test_a_step_refuses_a_device_this_machine_lacks():
 
 
 @NO_CUDA
-def test_a_study_on_cuda_is_refused_in_one_line_before_any_step_runs(tmp_path: Path):
+def test_a_study_on_cuda_is_refused_in_one_line_before_any_step_runs(tmp_path: Path, capsys):
     config = tmp_path / "on_gpu.yaml"
     settings = {
         "name": "on_gpu",
@@ -68,13 +67,15 @@ def test_a_study_on_cuda_is_refused_in_one_line_before_any_step_runs(tmp_path: P
         "eval": {"n_test_envs": 2, "episodes": 2, "device": "cuda:0"},
     }
     config.write_text(json.dumps(settings))
-    cli = [sys.executable, "-m", "lerobot_factorworld.cli", "study", f"--config_path={config}"]
-    run = subprocess.run(cli, capture_output=True, text=True, timeout=300)
-    assert run.returncode == 1
-    errors = [line for line in run.stderr.splitlines() if line.startswith("error:")]
+    # in process (the command line's one-line contract for a bad setting: tests/test_cli.py, as a new process)
+    with pytest.raises(SystemExit) as exit_info:
+        main(["study", f"--config_path={config}"])
+    assert exit_info.value.code == 1
+    stderr = capsys.readouterr().err
+    errors = [line for line in stderr.splitlines() if line.startswith("error:")]
     assert errors == [
         "error: eval.device=cuda:0 but this machine has 0 CUDA device(s); use --eval.device=cpu; "
         "train.device=cuda but this machine has 0 CUDA device(s); use --train.device=cpu"
     ]
-    assert "Traceback" not in run.stderr
+    assert "Traceback" not in stderr
     assert not (tmp_path / "study" / "steps").exists()
