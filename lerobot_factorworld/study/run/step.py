@@ -40,8 +40,8 @@ class Step:
 
     @cached_property
     def key(self) -> str:
-        """Computed once (a plan reads each step's key many times: ``factorworld configs`` hashed 566k payloads
-        for 50 studies); a step's inputs are never changed after it is made."""
+        """Computed once: a plan reads each step's key many times (its dependents' keys hash it again), and a
+        step's inputs are never changed after it is made."""
         return short_hash({"format": STEP_FORMAT, "kind": self.kind, "inputs": self.inputs, "deps": list(self.deps)})
 
     @property
