@@ -177,15 +177,29 @@ def _eval_cost(
     return cpu_s + encoder_s, 0.0
 
 
-def simulate(plan: Plan, steps: list[Step], slots: int, gpus: int, grouped: bool, model: dict[str, Any]) -> float:
+def step_costs(plan: Plan, steps: list[Step], model: dict[str, Any]) -> dict[str, tuple[float, float]]:
+    """:func:`step_cost` of each of ``steps``, by key: computed once for every profile an estimate simulates."""
+    index = {s.key: s for s in plan.steps}
+    return {s.key: step_cost(s, index, model) for s in steps}
+
+
+def simulate(
+    plan: Plan,
+    steps: list[Step],
+    slots: int,
+    gpus: int,
+    grouped: bool,
+    model: dict[str, Any],
+    costs: dict[str, tuple[float, float]] | None = None,
+) -> float:
     """Seconds until ``steps`` (with the rest of ``plan`` done) finish on ``slots`` workers (and ``gpus``
     GPUs taking training's per-sample work), scheduled as the runner does: ready evaluations first, then
-    trainings, then collections, each task on one worker."""
-    index = {s.key: s for s in plan.steps}
+    trainings, then collections, each task on one worker. ``costs``: :func:`step_costs`, if already known."""
+    costs = costs if costs is not None else step_costs(plan, steps, model)
     todo = {s.key for s in steps}
     cost = {}
     for s in steps:
-        fixed, accelerated = step_cost(s, index, model)
+        fixed, accelerated = costs[s.key]
         on_gpu = s.kind == "train" and gpus > 0
         cost[s.key] = (fixed + (accelerated / GPU_TRAIN_SPEEDUP if on_gpu else accelerated), on_gpu)
     waiting = {s.key: sum(1 for d in s.deps if d in todo) for s in steps}
@@ -251,14 +265,15 @@ def estimate(
     """Wall-clock hours of ``steps`` under each profile (a simulation of the runner's schedule)."""
     model = model or load_model()
     grouped = execution == "grouped"
+    costs = step_costs(plan, steps, model)
     out = {}
     for name, (slots, gpus) in PROFILES.items():
         if not steps:
             out[name] = 0.0
         elif slots > CLUSTER_SLOTS:  # a cluster: its throughput bound, the work spread over its slots
-            out[name] = _work_seconds(plan, steps, model) / slots / 3600
+            out[name] = sum(sum(cost) for cost in costs.values()) / slots / 3600
         else:
-            out[name] = (model["study_s"] + simulate(plan, steps, slots, gpus, grouped, model)) / 3600
+            out[name] = (model["study_s"] + simulate(plan, steps, slots, gpus, grouped, model, costs)) / 3600
     return out
 
 
@@ -276,11 +291,6 @@ def _extension_lines(plan: Plan, todo: list[Step]) -> list[str]:
             f"{budget - inputs.extends:g} new {unit}, from the last pass's end saved before {inputs.extends:g}; {state})"
         )
     return out
-
-
-def _work_seconds(plan: Plan, steps: list[Step], model: dict[str, Any]) -> float:
-    index = {s.key: s for s in plan.steps}
-    return sum(sum(step_cost(s, index, model)) for s in steps)
 
 
 def describe(cfg: StudyConfig, plan: Plan, options: RunOptions) -> str:
