@@ -1,7 +1,8 @@
 """Meta-World's scripted experts solve every task in the default scene and under each applicable
-physical single-factor shift (one seeded episode per sampled environment, at most one failing per cell: >= 90%
-of 10 environments for the tasks a packaged study collects, >= 80% of 5 for the others; pick-place, the paper's main task, >= 95% over 20
-episodes, two object starts per environment), and visual factors leave the physics exactly unchanged."""
+physical single-factor shift (one seeded episode per sampled environment, at most one failing per cell:
+>= 90% of 10 environments for the tasks a packaged study collects, >= 80% of 5 for the others; pick-place,
+the paper's main task, >= 95% over 20 episodes, two object starts per environment), and visual factors
+leave the physics exactly unchanged."""
 
 import dataclasses
 
