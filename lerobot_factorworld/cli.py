@@ -382,6 +382,9 @@ class CompareCurvesConfig:
         method: The first curve's method (default: its only one); also the second's unless ``second_method``.
         second_method: The second curve's method, if another.
         task: The task on both sides (default: each curve's only one).
+        family: The first curve's epochs declared beforehand as one finding (e.g. ``[64,80,96]``): only they are
+            compared, each difference's interval Bonferroni-corrected over them (at 1 - 0.05/k), and a line says
+            where the finding is resolved. Default: every matched point, each at 95% on its own.
     """
 
     first: str = ""
@@ -390,6 +393,7 @@ class CompareCurvesConfig:
     method: str | None = None
     second_method: str | None = None
     task: str | None = None
+    family: list[float] | None = None
 
     def __post_init__(self) -> None:
         from .study.results.compare_curves import MATCHES  # noqa: PLC0415 - the study stack loads only for this command
@@ -417,7 +421,7 @@ def cmd_compare_curves(args: list[str]) -> None:
         CurveSide(str(folders[1]), read_curve(folders[1] / CURVE_FILE), cfg.second_method or cfg.method, cfg.task),
     ]
     try:
-        print("\n".join(curve_comparison_lines(*sides, match=cfg.match, paired=len(seeds) == 1)))
+        print("\n".join(curve_comparison_lines(*sides, match=cfg.match, paired=len(seeds) == 1, family=cfg.family)))
     except ValueError as err:  # a method, task or budget the curves lack: the command line was wrong
         raise SettingError(str(err)) from None
 

@@ -8,7 +8,7 @@ from pathlib import Path
 
 import pytest
 
-from lerobot_factorworld.study.metrics import newcombe_independent, paired_gap
+from lerobot_factorworld.study.metrics import newcombe_independent, paired_gap, two_sided_z
 from lerobot_factorworld.study.results.compare_curves import CurveSide, curve_comparison_lines
 from lerobot_factorworld.study.results.curve import CURVE_FILE, read_curve, write_curve
 
@@ -56,6 +56,37 @@ def test_points_at_one_budget_are_compared_episode_by_episode():
     assert "for two independent samples;" in "\n".join(curve_comparison_lines(first, old, match="steps"))
 
 
+def test_a_family_declared_as_one_finding_is_compared_alone_at_its_bonferroni_level():
+    first, second = CurveSide("control", CONTROL), CurveSide("curve", CURVE)
+    lines = curve_comparison_lines(first, second, match="steps", family=[8, 16])
+    both = "\n".join(lines)
+    z = two_sided_z(1 - 0.05 / 2)  # 97.5%: two points share the family's 5%
+    assert (z, two_sided_z(1 - 0.05 / 3)) == pytest.approx((2.24140, 2.39398), abs=1e-5)  # normal tables
+    for outside in (0.0, 1.0):
+        with pytest.raises(ValueError, match="confidence must be in"):
+            two_sided_z(outside)
+    cells = [paired_gap(_bools(a["outcomes"]), _bools(b["outcomes"]), z) for a, b in zip(CONTROL, CURVE)]
+    for cell in cells:
+        assert f"| {_cell(cell)} |" in both
+    assert cells[0][1] < paired_gap(_bools(CONTROL[0]["outcomes"]), _bools(CURVE[0]["outcomes"]))[1]  # wider
+    assert "| first - second [97.5%, Bonferroni over 2] |" in lines[2]
+    resolved = ["above" if low > 0 else "below" if high < 0 else "not" for _, low, high in cells]
+    assert resolved == ["not", "above"]  # 5 of 30 vs 1 of 30 is not resolved at 97.5%; 9 vs 3 with 6 discordant is
+    assert (
+        "As one finding (2 points, each interval at 97.5%): first above second at 16 epochs; not resolved at 8 epochs."
+        in both
+    )
+    assert "Bonferroni-corrected over the 2 points named as one finding" in lines[-1]
+    one = "\n".join(curve_comparison_lines(first, second, match="steps", family=[16]))
+    assert "\n| 8 (" not in one and "[95%, Bonferroni over 1]" in one  # one point: its own 95%
+    with pytest.raises(
+        ValueError, match="the family names epochs 12, not a point of control matched in curve by steps; valid: 8, 16"
+    ):
+        curve_comparison_lines(first, second, match="steps", family=[8, 12])
+    with pytest.raises(ValueError, match="the family names no epochs; name some of control's matched by steps: 8, 16"):
+        curve_comparison_lines(first, second, match="steps", family=[])
+
+
 def test_a_method_task_or_budget_the_curves_lack_is_refused_naming_the_choices():
     two = CurveSide("two", CURVE + [_point(16, 17010, "0" * 30, method="bc")])
     with pytest.raises(ValueError, match="two's curve has methods bc, rt1_small: name one with --method"):
@@ -84,6 +115,8 @@ def test_the_command_reads_two_folders_and_pairs_only_studies_of_one_episode_see
     same = run_main([*argv, f"--second={folders['curve']}"], main)
     assert same.returncode == 0, same.stderr
     assert f"| {_cell(paired_gap(_bools(CONTROL[0]['outcomes']), _bools(CURVE[0]['outcomes'])))} |" in same.stdout
+    finding = run_main([*argv, f"--second={folders['curve']}", "--family=[16]"], main)
+    assert finding.returncode == 0 and "As one finding (1 point," in finding.stdout and "| 8 (" not in finding.stdout
     other = run_main([*argv, f"--second={folders['shifted']}"], main)
     assert f"| {_cell(newcombe_independent(5, 30, 2, 30))} |" in other.stdout and "do not pair" in other.stdout
     refused = run_main([*argv, f"--second={folders['curve']}", "--method=act"], main)

@@ -29,6 +29,15 @@ BOOTSTRAP_SEED = 0  # every interval restarts numpy's PCG64 from this seed: a re
 BOOTSTRAP_CHUNK = 200  # resamples drawn (and held in memory) at a time
 
 
+def two_sided_z(confidence: float) -> float:
+    """The normal quantile of a two-sided interval at ``confidence`` (1.96 at 0.95)."""
+    if not 0 < confidence < 1:
+        raise ValueError(f"confidence must be in (0, 1), got {confidence}")
+    from scipy import stats  # noqa: PLC0415 - scipy.stats takes a second to import; most users of this module never need it
+
+    return float(stats.norm.ppf(1 - (1 - confidence) / 2))
+
+
 def wilson_interval(successes: int, n: int, z: float = Z95) -> tuple[float, float]:
     """Wilson score interval of a success rate; ``(nan, nan)`` for ``n == 0``."""
     if n == 0:

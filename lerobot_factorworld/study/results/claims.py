@@ -33,7 +33,15 @@ import numpy as np
 from scipy import stats
 
 from ...protocol.conditions import PAIR_SEPARATOR, TRAIN_SUITE
-from ..metrics import group_mean, nanmean, ols_slope, pair_metric_array, percentile_interval, pooled_rates
+from ..metrics import (
+    group_mean,
+    nanmean,
+    ols_slope,
+    pair_metric_array,
+    percentile_interval,
+    pooled_rates,
+    two_sided_z,
+)
 from ..plan.claim_config import ClaimConfig
 from ..plan.config import StudyConfig
 from ..plan.power import difference_resolvable, mean_resolvable_gap, pair_metric_resolvable, slope_resolvable
@@ -599,7 +607,7 @@ def _decide_one(c: Comparison, ev: _Evidence, level: float, stopped: bool) -> tu
     """One comparison at its Holm level: its :class:`Decided` and whether its null was rejected (the gap resolved
     either way; a confounded shrink's gap did shrink, so Holm goes on)."""
     low, high = decision_interval(ev.reps, ev.per_seed, level)
-    z = float(stats.norm.ppf(1 - (1 - level) / 2))
+    z = two_sided_z(level)
     episodes = _episodes(c.table)
     smallest = c.resolvable(episodes, z) if np.isfinite(episodes) else math.nan  # counts unknown: no power
     verdict = _verdict(c, low, high, smallest, counts_known=bool(np.isfinite(episodes)))

@@ -7,7 +7,9 @@ same training budget, which neither study's report gives. Points are matched by 
 gradient step they were saved at (``steps``: a run on twice the demos reaches the same steps in half the epochs).
 Each difference is taken on the cells (N, seed, widths) both points have (:func:`.curve.point_difference`). It is
 paired episode by episode where both points kept their outcomes and both studies play the same episode seeds, and
-taken as two independent samples otherwise. These are pure functions of ``curve.csv`` rows:
+taken as two independent samples otherwise. Each interval is 95% on its own; points declared beforehand as one
+finding (``family``: the first curve's epochs) are compared alone, each interval Bonferroni-corrected over them,
+and the finding is stated from those intervals only. These are pure functions of ``curve.csv`` rows:
 ``factorworld compare-curves`` reads the files and prints :func:`curve_comparison_lines`.
 """
 
@@ -17,10 +19,12 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 
+from ..metrics import Z95, two_sided_z
 from .curve import Difference, point_difference, pooled_curve
 
 MATCHES = ("epochs", "steps")
 STEPS_TOLERANCE = 0.05  # match=steps: points saved within 5% of each other's gradient step count as one budget
+FAMILY_ERROR = 0.05  # a family's error, split evenly between its points (Bonferroni)
 
 
 @dataclass(frozen=True)
@@ -34,11 +38,17 @@ class CurveSide:
 
 
 def curve_comparison_lines(
-    first: CurveSide, second: CurveSide, match: str = "epochs", paired: bool = True
+    first: CurveSide,
+    second: CurveSide,
+    match: str = "epochs",
+    paired: bool = True,
+    family: Sequence[float] | None = None,
 ) -> list[str]:
     """Markdown lines: the matched points of the two curves, each P_T with its Wilson interval, and first minus
     second with Newcombe's interval (``paired``: whether the two studies play the same episode seeds, so that
-    episode i of one may pair with episode i of the other)."""
+    episode i of one may pair with episode i of the other). ``family``: the first curve's epochs that form one
+    finding: only they are compared, each difference at ``1 - 0.05 / k`` over their ``k``, and a line says where
+    the finding is resolved."""
     if match not in MATCHES:
         raise ValueError(f"unknown match {match!r}; valid: {', '.join(MATCHES)}")
     points = [_points(side) for side in (first, second)]
@@ -46,28 +56,85 @@ def curve_comparison_lines(
     if not pairs:
         at = {name: sorted(p) for name, p in zip((first.name, second.name), points)}
         raise ValueError(f"the two curves share no checkpoint by {match}: {at}")
-    rows, kinds, subset = [], set(), False
+    level = 0.95
+    if family is not None:
+        pairs = _family_pairs(pairs, family, first.name, second.name, match)
+        level = 1 - FAMILY_ERROR / len(pairs)
+    z = Z95 if family is None else two_sided_z(level)
+    rows, kinds, subset, found_at = [], set(), False, []
     for mine, theirs in pairs:
-        found = point_difference(*(p if paired else _unpaired(p) for p in (mine, theirs)))
+        found = point_difference(*(p if paired else _unpaired(p) for p in (mine, theirs)), z)
         cell = "" if found is None else _difference_cell(found)
         if found is not None:
             kinds.add(found.paired)
             subset = subset or found.subset
+        found_at.append((mine["epochs"], found))
         rows.append(
             f"| {mine['epochs']:g} ({mine['steps']}) | {theirs['epochs']:g} ({theirs['steps']}) | {_rate(mine)} | "
             f"{_rate(theirs)} | {cell} |"
         )
     (m1, t1), (m2, t2) = (_line(side) for side in (first, second))
+    corrected = "" if family is None else f", Bonferroni over {len(pairs)}"
     return [
         f"first: {first.name} ({m1}, {t1}); second: {second.name} ({m2}, {t2}); matched by {match}",
         "",
         "| first: epochs (step) | second: epochs (step) | first P_T [95%] (episodes) | second P_T [95%] (episodes) "
-        "| first - second [95%] |",
+        f"| first - second [{_percent(level)}{corrected}] |",
         "|---|---|---|---|---|",
         *rows,
         "",
-        _note(kinds, subset, paired),
+        *([] if family is None else [_finding(found_at, level), ""]),
+        _note(kinds, subset, paired, level, len(pairs) if family is not None else 0),
     ]
+
+
+def _family_pairs(
+    pairs: list[tuple[dict, dict]], family: Sequence[float], first: str, second: str, match: str
+) -> list[tuple[dict, dict]]:
+    """The matched pairs whose first point is one of the family's epochs; refused where one is not matched."""
+    by_epochs = {mine["epochs"]: (mine, theirs) for mine, theirs in pairs}
+    wanted = sorted({float(e) for e in family})
+    missing = [e for e in wanted if e not in by_epochs]
+    valid = ", ".join(f"{e:g}" for e in sorted(by_epochs))
+    if not wanted:
+        raise ValueError(f"the family names no epochs; name some of {first}'s matched by {match}: {valid}")
+    if missing:
+        what = ", ".join(f"{e:g}" for e in missing)
+        raise ValueError(
+            f"the family names epochs {what}, not a point of {first} matched in {second} by {match}; valid: {valid}"
+        )
+    return [by_epochs[e] for e in wanted]
+
+
+def _finding(found_at: list[tuple[float, Difference | None]], level: float) -> str:
+    """Where the family's corrected intervals lie wholly above or below zero, and where neither."""
+    where: dict[str, list[str]] = {"above": [], "below": [], "not resolved": []}
+    for epochs, found in found_at:
+        side = "not resolved"
+        if found is not None and found.low > 0:
+            side = "above"
+        elif found is not None and found.high < 0:
+            side = "below"
+        where[side].append(f"{epochs:g}")
+    parts = [
+        f"first {side} second at {', '.join(at)} epochs"
+        if side != "not resolved"
+        else f"not resolved at {', '.join(at)} epochs"
+        for side, at in where.items()
+        if at
+    ]
+    return (
+        f"As one finding ({_points_text(len(found_at))}, each interval at {_percent(level)}): " + "; ".join(parts) + "."
+    )
+
+
+def _points_text(k: int) -> str:
+    return f"{k} point" + ("" if k == 1 else "s")
+
+
+def _percent(level: float) -> str:
+    """95% as ``95%``, a corrected level to one decimal (``98.3%``)."""
+    return f"{level:.0%}" if round(level * 100, 6).is_integer() else f"{level:.1%}"
 
 
 def _points(side: CurveSide) -> dict[float, dict[str, Any]]:
@@ -122,16 +189,21 @@ def _difference_cell(found: Difference) -> str:
     return f"{found.diff:+.2f} [{found.low:+.2f}, {found.high:+.2f}]" + (" †" if found.subset else "")
 
 
-def _note(kinds: set[bool], subset: bool, paired: bool) -> str:
+def _note(kinds: set[bool], subset: bool, paired: bool, level: float = 0.95, family: int = 0) -> str:
     how = {
-        frozenset({True}): "Newcombe's 95% interval for paired samples: episode i of one point with episode i of the "
+        frozenset({True}): "Newcombe's interval for paired samples: episode i of one point with episode i of the "
         "other, each played at seed start_seed + i in its study's training environments",
-        frozenset({False}): "Newcombe's 95% interval for two independent samples"
+        frozenset({False}): "Newcombe's interval for two independent samples"
         + ("" if paired else " (the two studies play other episode seeds, so their episodes do not pair)"),
-    }.get(frozenset(kinds), "Newcombe's 95% interval, paired where both points kept their episodes' outcomes and "
+    }.get(frozenset(kinds), "Newcombe's interval, paired where both points kept their episodes' outcomes and "
           "for two independent samples where one did not")  # fmt: skip
+    corrected = (
+        f"each at {_percent(level)}, Bonferroni-corrected over the {_points_text(family)} named as one finding"
+        if family
+        else "each at 95% on its own, not corrected for the others"
+    )
     return (
-        f"Each P_T: its Wilson 95% interval. Each difference: {how}; each on its own, not corrected for the others, "
+        f"Each P_T: its Wilson 95% interval. Each difference: {how}; {corrected}, "
         "and of the episodes' noise only (one training seed per curve: the spread between training seeds is not in "
         "it)." + (" † on the cells (N, seed, widths) both points have, where one has more." if subset else "")
     )

@@ -15,7 +15,7 @@ from typing import Any
 from ...core import machine
 from ...core.io import atomic_write_text, read_table
 from ...protocol.conditions import TRAIN_SUITE
-from ..metrics import newcombe_independent, paired_gap, wilson_interval
+from ..metrics import Z95, newcombe_independent, paired_gap, wilson_interval
 from ..plan.config import StudyConfig
 from ..plan.grid import CURVE_EPOCHS, Plan
 from ..run.inputs import whole_epochs
@@ -203,7 +203,7 @@ def _counts(by_cell: dict[tuple[str, ...], tuple[int, int, str]], cells: Sequenc
 
 @dataclass(frozen=True)
 class Difference:
-    """``point`` minus ``other`` (:func:`point_difference`) with Newcombe's 95% interval, paired or not, and whether
+    """``point`` minus ``other`` (:func:`point_difference`) with Newcombe's interval, paired or not, and whether
     it leaves out cells one point has and the other lacks."""
 
     diff: float
@@ -213,13 +213,14 @@ class Difference:
     subset: bool
 
 
-def point_difference(point: dict[str, Any] | None, other: dict[str, Any] | None) -> Difference | None:
-    """Two pooled points' difference on the cells both have (:func:`compare_points`); ``None`` without both."""
+def point_difference(point: dict[str, Any] | None, other: dict[str, Any] | None, z: float = Z95) -> Difference | None:
+    """Two pooled points' difference on the cells both have (:func:`compare_points`), its interval at the normal
+    quantile ``z`` (95% by default); ``None`` without both."""
     comparison = compare_points(point, other) if point and other else None
     if comparison is None:
         return None
     if comparison.paired:
-        diff, low, high = paired_gap(comparison.first, comparison.second)
+        diff, low, high = paired_gap(comparison.first, comparison.second, z)
     else:
-        diff, low, high = newcombe_independent(*comparison.first, *comparison.second)
+        diff, low, high = newcombe_independent(*comparison.first, *comparison.second, z)
     return Difference(diff, low, high, comparison.paired, comparison.subset)
