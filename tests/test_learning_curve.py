@@ -23,6 +23,7 @@ from lerobot_factorworld.study.results.curve import (
     CURVE_COLUMNS,
     CURVE_FILE,
     OPTIONAL_CURVE_COLUMNS,
+    machines_between,
     machines_text,
     pooled_curve,
     read_curve,
@@ -188,6 +189,12 @@ def test_the_curve_says_which_machines_trained_each_checkpoint(tmp_path):
     assert machines_text(runs, 100) == "AMD EPYC; avx2; 2 CPUs"
     assert machines_text(runs, 300) == "AMD EPYC; avx2; 2 CPUs | Intel Xeon; amx_bf16, avx2; 2 CPUs"
     assert machines_text([], 300) == ""
+    # since the previous point: the runs whose steps fall after it (a run ends where the next one starts)
+    assert machines_between(runs, 100, 300) == "Intel Xeon; amx_bf16, avx2; 2 CPUs | AMD EPYC; avx2; 2 CPUs"
+    assert machines_between(runs, 120, 180) == "Intel Xeon; amx_bf16, avx2; 2 CPUs"
+    assert machines_between(runs, 200, 300) == machines_between(runs, 0, 100) == "AMD EPYC; avx2; 2 CPUs"
+    killed = [{"from_step": 0, "machine": amd}, {"from_step": 50, "machine": intel}, {"from_step": 50, "machine": amd}]
+    assert machines_between(killed, 0, 100) == "AMD EPYC; avx2; 2 CPUs"  # Intel saved nothing before AMD resumed
     rows = [{"method": "a", "task": "t", "n_train_envs": 1, "seed": 0, "epochs": e, "successes": 1, "episodes": 4,
              "stages": "", "trained_on": machines_text(runs, at)} for e, at in ((10, 100), (20, 300))]  # fmt: skip
     text = "\n".join(curve_section(rows, plotted=False, methods=["a"]))
@@ -200,6 +207,14 @@ def test_the_curve_says_which_machines_trained_each_checkpoint(tmp_path):
     ]
     text = "\n".join(curve_section(parts, plotted=False, methods=["a"]))
     assert "| a | t | 1 | 1 | 10 | Intel Xeon; amx_bf16, avx2; 2 CPUs |" in text and "; then" not in text
+    linked = [{**row, "trained_since_previous": machines_between(runs, after, at)}
+              for row, (after, at) in zip(rows, ((0, 100), (100, 300)))]  # fmt: skip
+    text = "\n".join(curve_section(linked, plotted=False, methods=["a"]))
+    assert "| epochs | trained on | since the previous point |" in text
+    assert (
+        "| 20 | AMD EPYC; avx2; 2 CPUs; then Intel Xeon; amx_bf16, avx2; 2 CPUs | Intel Xeon; amx_bf16, avx2; 2 CPUs; then AMD EPYC; avx2; 2 CPUs |"
+        in text
+    )
     one = "\n".join(curve_section(rows[:1], plotted=False, methods=["a"]))
     assert "One machine trained every checkpoint: AMD EPYC; avx2; 2 CPUs." in one
     assert "### Which machines" not in "\n".join(curve_section([{**rows[0], "trained_on": ""}], False, ["a"]))

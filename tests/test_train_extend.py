@@ -122,6 +122,7 @@ def test_ten_epochs_continued_to_twenty_give_the_checkpoint_files_of_twenty_from
     assert len({r["trained_on"] for r in rows}) == 1 and re.search(
         r"; \d+ CPUs(;|$)", rows[0]["trained_on"]
     )  # a oneDNN cap follows
+    assert [r["trained_since_previous"] for r in rows] == [r["trained_on"] for r in rows]  # one machine throughout
 
 
 def test_a_chained_curve_s_point_at_a_link_s_end_is_that_link_s_last_step(tmp_path):

@@ -78,25 +78,39 @@ def _budget_sentence(pooled: Sequence[dict[str, Any]], budgets: Mapping[str, flo
 def _machines(rows: Sequence[dict[str, Any]]) -> list[str]:
     """Which machines trained each cell's checkpoints (``trained_on``), per cell, not pooled: cells of a study run in
     parts may have trained on other machines without any training having moved. One sentence when one machine
-    trained them all, else a row per checkpoint; nothing for a curve.csv that does not say."""
-    machines = [tuple(m for m in row.get("trained_on", "").split(MACHINES_SEPARATOR) if m) for row in rows]
+    trained them all, else a row per checkpoint, with the machines of its steps since the cell's previous point
+    where the curve says (a chain's link: what changed between two points); nothing for a curve.csv that does not
+    say."""
+    machines = [_names(row, "trained_on") for row in rows]
     if not any(machines):
         return []
     lines = ["", "### Which machines trained the curve", ""]
     if len(set(machines)) == 1 and len(machines[0]) == 1:
         return [*lines, f"One machine trained every checkpoint: {machines[0][0]}."]
+    since = any(row.get("trained_since_previous") for row in rows)
     lines += [
         "A training resumed on another machine (`factorworld unpack`) is not byte for byte what one machine would "
         "make where their kernels differ (docs/study.md, *Across machines*); each cell's machines, each once, in the "
-        "order they first trained its checkpoint (its training's `trained_on`):",
+        "order they first trained its checkpoint (its training's `trained_on`)"
+        + (
+            ", and those that trained its steps since the cell's previous point (`trained_since_previous`)"
+            if since
+            else ""
+        )
+        + ":",
         "",
-        "| method | task | N | seed | epochs | trained on |",
-        "|---|---|---|---|---|---|",
+        "| method | task | N | seed | epochs | trained on |" + (" since the previous point |" if since else ""),
+        "|---|---|---|---|---|---|" + ("---|" if since else ""),
     ]
     for row, names in zip(rows, machines, strict=True):
         cell = " | ".join(str(row.get(c, "")) for c in ("method", "task", "n_train_envs", "seed"))
-        lines.append(f"| {cell} | {row['epochs']:g} | {'; then '.join(names) or 'not recorded'} |")
+        extra = f" {'; then '.join(_names(row, 'trained_since_previous')) or 'not recorded'} |" if since else ""
+        lines.append(f"| {cell} | {row['epochs']:g} | {'; then '.join(names) or 'not recorded'} |{extra}")
     return lines
+
+
+def _names(row: dict[str, Any], column: str) -> tuple[str, ...]:
+    return tuple(m for m in row.get(column, "").split(MACHINES_SEPARATOR) if m)
 
 
 def _stages(by_line: dict[tuple[str, str], dict[float, dict]]) -> list[str]:

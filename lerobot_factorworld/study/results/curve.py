@@ -41,9 +41,15 @@ CURVE_COLUMNS = (
     "step",  # key of the eval step
     "stages",  # episodes per furthest stage, as results.csv's column: where the checkpoint's failures end
     "trained_on",  # the machines that trained the checkpoint, in the order they did (MACHINES_SEPARATOR between)
+    "trained_since_previous",  # those that trained its steps after the cell's previous point (a chain: its link)
     "outcomes",  # each episode's success in episode order ("1" or "0"; episode i played at seed start_seed + i)
 )
-OPTIONAL_CURVE_COLUMNS = ("stages", "trained_on", "outcomes")  # added later: older curve.csv files lack them
+OPTIONAL_CURVE_COLUMNS = (
+    "stages",
+    "trained_on",
+    "trained_since_previous",
+    "outcomes",
+)  # added later: older curve.csv files lack them
 MACHINES_SEPARATOR = " | "  # between the machines of trained_on (machine.describe's text holds ';' and ',')
 CELL = ("method", "task", "n_train_envs", "seed", "widths")
 
@@ -56,7 +62,7 @@ def curve_rows(cfg: StudyConfig, plan: Plan, study_dir: str | Path) -> list[dict
     points = [(s, s.meta[CURVE_EPOCHS]) for s in plan.curve_points()]
     trained = {s.key: s.inputs for s in plan.of_kind("train")}
     points += [(s, whole_epochs(trained[s.deps[0]]["epochs"])) for s in last_points(plan)]  # the training's epochs
-    rows, trainings = [], {}  # each training's result read once for all its checkpoints
+    found, trainings = [], {}  # each training's result read once for all its checkpoints
     for step, epochs in points:
         if not is_done(step, study_dir):
             continue
@@ -66,14 +72,34 @@ def curve_rows(cfg: StudyConfig, plan: Plan, study_dir: str | Path) -> list[dict
         trained = trainings[key]
         saved_at = trained.get("curve", {}).get(str(epochs), trained["steps"])
         row = _row(cfg, Evaluation(step, read_result(step, study_dir)), epochs, saved_at)
-        rows.append({**row, "trained_on": machines_text(trained.get(TRAINED_ON, []), saved_at)})
-    return sorted(rows, key=lambda r: ([str(r[c]) for c in CELL], r["epochs"]))
+        found.append(({**row, "trained_on": machines_text(trained.get(TRAINED_ON, []), saved_at)}, trained))
+    found.sort(key=lambda pair: ([str(pair[0][c]) for c in CELL], pair[0]["epochs"]))
+    rows, previous = [], {}  # per cell: the step its previous point was saved at
+    for row, trained in found:
+        cell = tuple(str(row[c]) for c in CELL)
+        since = machines_between(trained.get(TRAINED_ON, []), previous.get(cell, 0), row["steps"])
+        rows.append({**row, "trained_since_previous": since})
+        previous[cell] = row["steps"]
+    return rows
 
 
 def machines_text(runs: Sequence[dict[str, Any]], saved_at: int) -> str:
     """The machines that trained a checkpoint saved at ``saved_at``, from its training's runs (``trained_on``):
     each distinct one once, in the order it first trained ("" for a training that recorded none)."""
     machines = [machine.describe(run["machine"]) for run in runs if run["from_step"] < saved_at]
+    return MACHINES_SEPARATOR.join(dict.fromkeys(machines))
+
+
+def machines_between(runs: Sequence[dict[str, Any]], after: int, saved_at: int) -> str:
+    """The machines that trained steps ``after`` to ``saved_at`` of a checkpoint's lineage (its training's runs,
+    those of the trainings it extends first): each distinct one once, in the order it trained. A run ends where
+    the next one starts; one that saved nothing before the next started trained none of the lineage's steps."""
+    ends = [run["from_step"] for run in runs[1:]] + [math.inf]
+    machines = [
+        machine.describe(run["machine"])
+        for run, end in zip(runs, ends)
+        if run["from_step"] < saved_at and end > after and end > run["from_step"]
+    ]
     return MACHINES_SEPARATOR.join(dict.fromkeys(machines))
 
 

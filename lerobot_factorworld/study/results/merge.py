@@ -25,7 +25,7 @@ from .rows import RESULT_COLUMNS, RESULTS_FILE, read_results, write_results
 
 CELL = ("method", "task", "n_train_envs", "seed", "widths", "condition")
 PROVENANCE_COLUMNS = ("commit", "source_hash")  # where a row was made, not what it measured
-CURVE_PROVENANCE_COLUMNS = ("trained_on",)  # the same, of a learning-curve point
+CURVE_PROVENANCE_COLUMNS = ("trained_on", "trained_since_previous")  # the same, of a learning-curve point
 CHANGED_CONFIG = "if the config changed what it plans, --drop_unplanned=true leaves the old rows out"
 
 
