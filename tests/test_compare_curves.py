@@ -134,7 +134,8 @@ def test_the_comparisons_docs_rt1_quotes_are_what_the_command_prints_from_the_co
 
     doc = (ROOT / "docs" / "rt1.md").read_text()
     quotes = re.findall(r"```bash\n(factorworld compare-curves [^\n]+)\n```\n```\n(.*?)\n```\n", doc, re.S)
-    assert len(quotes) >= 2, "docs/rt1.md quotes the language's and the demos' comparisons"
+    assert len(quotes) >= 3, "docs/rt1.md quotes the language's and the demos' comparisons"
+    assert any("--family=" in command for command, _ in quotes), "and the declared finding's"
     for command, quoted in quotes:
         argv = [arg.replace("docs/results", str(ROOT / "docs" / "results")) for arg in command.split()]
         printed = run_main(argv, main)
@@ -144,4 +145,6 @@ def test_the_comparisons_docs_rt1_quotes_are_what_the_command_prints_from_the_co
             rows
             and [line for line in quoted.splitlines() if line.startswith("| ") and "epochs (step)" not in line] == rows
         ), command
+        findings = [line for line in quoted.splitlines() if line.startswith("As one finding")]
+        assert findings == [line for line in printed.stdout.splitlines() if line.startswith("As one finding")], command
         assert "for paired samples" in printed.stdout  # both studies play the same episode seeds
