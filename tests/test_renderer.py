@@ -124,3 +124,33 @@ print("ok")
     assert out.returncode == 0, out.stderr
     assert out.stdout.strip() == "ok"
     assert "Traceback" not in out.stderr and "Exception ignored" not in out.stderr, out.stderr
+
+
+def test_shared_contexts_left_alive_are_dropped_at_exit_not_destroyed_after_egl_is_gone():
+    """MuJoCo's EGL backend terminates its display in an exit hook; a shared context destroyed after that raised in
+    ``GLContext.__del__`` ("Exception ignored", once per context, at every xdist worker's exit). The package's own
+    exit hook drops their handles, so nothing is destroyed once the display is gone: here the contexts, one made in another thread, are deleted after the
+    display is terminated, with and without that hook having run."""
+    script = """
+import sys, threading
+from mujoco import egl
+from lerobot_factorworld.scene import renderer
+made = [renderer.shared_gl_context(32, 32)]
+worker = threading.Thread(target=lambda: made.append(renderer.shared_gl_context(64, 64)))
+worker.start(); worker.join()
+if sys.argv[1] == "hook":
+    renderer._forget_contexts_at_exit()
+egl.EGL.eglTerminate(egl.EGL_DISPLAY)  # what MuJoCo's own exit hook does
+renderer._local.contexts.clear()
+del made
+print("deleted")
+"""
+    if os.environ.get("MUJOCO_GL") != "egl":
+        pytest.skip("the EGL backend's exit order")
+    runs = {
+        mode: subprocess.run([sys.executable, "-c", script, mode], capture_output=True, text=True, timeout=120)
+        for mode in ("hook", "none")
+    }
+    assert runs["hook"].returncode == 0 and runs["hook"].stdout.strip() == "deleted", runs["hook"].stderr[-2000:]
+    assert "Exception ignored" not in runs["hook"].stderr, runs["hook"].stderr[-2000:]
+    assert "Exception ignored" in runs["none"].stderr  # without it, the noise this removes

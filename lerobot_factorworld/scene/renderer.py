@@ -12,14 +12,17 @@ to ``mujoco.Renderer``'s (``tests/test_renderer.py`` checks, interleaving severa
 
 from __future__ import annotations
 
+import atexit
 import os
 import sys
 import threading
+import weakref
 
 import mujoco
 from mujoco import gl_context
 
 _local = threading.local()  # per thread: {(width, height): (pid, GLContext)}
+_made: weakref.WeakSet = weakref.WeakSet()  # every shared context alive in this process, whichever thread made it
 
 
 def shared_gl_context(width: int, height: int):
@@ -32,7 +35,18 @@ def shared_gl_context(width: int, height: int):
     if pid != os.getpid():
         context = gl_context.GLContext(width, height)
         contexts[(width, height)] = (os.getpid(), context)
+        _made.add(context)
     return context
+
+
+@atexit.register
+def _forget_contexts_at_exit() -> None:
+    """Drop the handles of the shared contexts still alive when the interpreter exits, rather than destroy them
+    later: MuJoCo's EGL backend terminates its display in an exit hook of its own, and a context destroyed after
+    that raises in its ``__del__`` (printed as "Exception ignored in GLContext.__del__"). The process's contexts go
+    with it."""
+    for context in list(_made):
+        context._context = None  # what every backend's GLContext.free() tests before destroying
 
 
 class SharedContextRenderer(mujoco.Renderer):
