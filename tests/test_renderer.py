@@ -129,8 +129,8 @@ print("ok")
 def test_shared_contexts_left_alive_are_dropped_at_exit_not_destroyed_after_egl_is_gone():
     """MuJoCo's EGL backend terminates its display in an exit hook; a shared context destroyed after that raised in
     ``GLContext.__del__`` ("Exception ignored", once per context, at every xdist worker's exit). The package's own
-    exit hook drops their handles, so nothing is destroyed once the display is gone: here the contexts, one made in another thread, are deleted after the
-    display is terminated, with and without that hook having run."""
+    exit hook drops their handles, so nothing is destroyed once the display is gone: here the contexts, one made
+    in another thread, are deleted after the display is terminated, with and without that hook having run."""
     script = """
 import sys, threading
 from mujoco import egl

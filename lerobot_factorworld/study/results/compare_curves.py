@@ -19,12 +19,12 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 
-from ..metrics import Z95, two_sided_z
+from ..metrics import two_sided_z
 from .curve import Difference, point_difference, pooled_curve
 
 MATCHES = ("epochs", "steps")
 STEPS_TOLERANCE = 0.05  # match=steps: points saved within 5% of each other's gradient step count as one budget
-FAMILY_ERROR = 0.05  # a family's error, split evenly between its points (Bonferroni)
+ERROR = 0.05  # each interval's, or a family's split evenly between its points (Bonferroni)
 
 
 @dataclass(frozen=True)
@@ -56,11 +56,12 @@ def curve_comparison_lines(
     if not pairs:
         at = {name: sorted(p) for name, p in zip((first.name, second.name), points)}
         raise ValueError(f"the two curves share no checkpoint by {match}: {at}")
-    level = 0.95
+    corrected_over = 0  # points in the family: 0 without one
     if family is not None:
         pairs = _family_pairs(pairs, family, first.name, second.name, match)
-        level = 1 - FAMILY_ERROR / len(pairs)
-    z = Z95 if family is None else two_sided_z(level)
+        corrected_over = len(pairs)
+    level = 1 - ERROR / max(corrected_over, 1)
+    z = two_sided_z(level)
     rows, kinds, subset, found_at = [], set(), False, []
     for mine, theirs in pairs:
         found = point_difference(*(p if paired else _unpaired(p) for p in (mine, theirs)), z)
@@ -74,7 +75,7 @@ def curve_comparison_lines(
             f"{_rate(theirs)} | {cell} |"
         )
     (m1, t1), (m2, t2) = (_line(side) for side in (first, second))
-    corrected = "" if family is None else f", Bonferroni over {len(pairs)}"
+    corrected = f", Bonferroni over {corrected_over}" if corrected_over else ""
     return [
         f"first: {first.name} ({m1}, {t1}); second: {second.name} ({m2}, {t2}); matched by {match}",
         "",
@@ -83,8 +84,8 @@ def curve_comparison_lines(
         "|---|---|---|---|---|",
         *rows,
         "",
-        *([] if family is None else [_finding(found_at, level), ""]),
-        _note(kinds, subset, paired, level, len(pairs) if family is not None else 0),
+        *([_finding(found_at, level), ""] if corrected_over else []),
+        _note(kinds, subset, paired, level, corrected_over),
     ]
 
 
@@ -108,21 +109,15 @@ def _family_pairs(
 
 def _finding(found_at: list[tuple[float, Difference | None]], level: float) -> str:
     """Where the family's corrected intervals lie wholly above or below zero, and where neither."""
-    where: dict[str, list[str]] = {"above": [], "below": [], "not resolved": []}
+    where: dict[str, list[str]] = {"first above second": [], "first below second": [], "not resolved": []}
     for epochs, found in found_at:
         side = "not resolved"
         if found is not None and found.low > 0:
-            side = "above"
+            side = "first above second"
         elif found is not None and found.high < 0:
-            side = "below"
+            side = "first below second"
         where[side].append(f"{epochs:g}")
-    parts = [
-        f"first {side} second at {', '.join(at)} epochs"
-        if side != "not resolved"
-        else f"not resolved at {', '.join(at)} epochs"
-        for side, at in where.items()
-        if at
-    ]
+    parts = [f"{side} at {', '.join(at)} epochs" for side, at in where.items() if at]
     return (
         f"As one finding ({_points_text(len(found_at))}, each interval at {_percent(level)}): " + "; ".join(parts) + "."
     )
