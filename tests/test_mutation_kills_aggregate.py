@@ -680,3 +680,30 @@ def test_method_rho_differences_resample_only_the_seeds_of_the_methods_compared(
     found = aggregate.method_rho_differences([*other, *runs(bc), *runs(aug)], ["bc", "aug"], list(REFERENCE), REFERENCE)
     # the point (w = 1/2): both rank camera_pos, light, table_texture (rho 0.5); each rho is 0.5 at w = 0, 1 at w = 1
     assert plain(found) == plain({"aug": ((0.5, 0.5, 1.0), (0.0, 0.0, 0.0))})
+
+
+def test_method_success_differences_set_each_method_s_p_t_against_the_first_on_the_train_cells_both_have():
+    """P_T per method (mean over tasks and N per seed, then seeds) next to the first's, on the train cells both
+    have: a cell only one method has, a shifted condition and a method not asked for change nothing."""
+    train = [
+        row("train", 0.8, seed=0),
+        row("train", 0.6, seed=1),
+        row("train", 0.4, method="rt1", seed=0),
+        row("train", 0.2, method="rt1", seed=1),
+        row("train", 0.9, method="rt1", seed=2),  # bc has no seed 2: left out
+        row("light", 0.0, method="rt1", seed=0, gap=0.4),  # not a train cell
+        row("train", 0.1, method="other", seed=0),
+    ]
+    found = aggregate.method_success_differences(train, ["bc", "rt1"])
+    assert list(found) == ["rt1"]
+    base, own, diff = found["rt1"]
+    assert (base[0], own[0], diff[0]) == pytest.approx((0.7, 0.3, -0.4))
+    assert base[1] <= 0.7 <= base[2] and own[1] <= 0.3 <= own[2] and diff[1] <= -0.4 <= diff[2]
+    assert diff[1] < diff[2]  # two seeds: the seed bootstrap moves it
+    assert aggregate.method_success_differences(train, ["bc"]) == {}
+    assert aggregate.method_success_differences(train, ["bc", "absent"]) == {}
+    # each method against the first: the third's P_T is compared with bc's, not with rt1's
+    third = [{**r, "method": "aug", "success_rate": 1.0} for r in train if r["method"] == "bc"]
+    both = aggregate.method_success_differences([*train, *third], ["bc", "rt1", "aug"])
+    assert list(both) == ["rt1", "aug"] and both["rt1"] == found["rt1"]
+    assert (both["aug"][0][0], both["aug"][2][0]) == pytest.approx((0.7, 0.3))

@@ -35,6 +35,7 @@ from ..results.aggregate import (
     main_grid,
     method_gap_differences,
     method_rho_differences,
+    method_success_differences,
     pair_bands,
     pair_rows,
     pair_summary,
@@ -521,8 +522,8 @@ def _methods_section(cfg: StudyConfig, rows: list[dict]) -> list[str]:
         f"shrinks the gap), each with its 95% bootstrap interval. Groups of factors are section 5.2's: "
         + "; ".join(f"{name} = {', '.join(group)}" for name, group in PAPER_FACTOR_GROUPS.items())
         + f". Each method is compared with {base} on the cells (task, N, seed, condition) both have (*cells*: how "
-        "many, of both methods' train and shifted conditions). A method with a lower P_T has less gap to lose: read "
-        "the difference with its success rates below.",
+        "many, of both methods' train and shifted conditions). A gap cannot exceed P_T, so a method with a lower P_T "
+        "has less gap to lose: read each difference with the P_T table after it.",
         "",
         f"| method | factors | cells | gap of {base} | gap of the method | difference | 95% interval |",
         "|---|---|---|---|---|---|---|",
@@ -537,6 +538,32 @@ def _methods_section(cfg: StudyConfig, rows: list[dict]) -> list[str]:
                     f"| {method} | {label} | {shared} | {base_gap[0]:+.3f} | {gap[0]:+.3f} | {diff[0]:+.3f} | "
                     f"{ci(*diff[1:])} |"
                 )
+    lines.append("")
+    return lines + _methods_success_table(base, methods, rows)
+
+
+def _methods_success_table(base: str, methods: list[str], rows: list[dict]) -> list[str]:
+    """Each method's P_T next to the first's on the training cells both have: a gap cannot exceed P_T, so a gap
+    difference is read with the P_T difference beside it (a smaller gap with a lower P_T may only be less to lose)."""
+    found = method_success_differences(rows, methods)
+    if not found:
+        return []
+    grid = [r for r in main_grid(rows) if r["condition"] == TRAIN_SUITE]
+    lines = [
+        f"P_T (success on the training environments, mean over tasks and N) of each method next to {base}'s, on the "
+        f"train cells (task, N, seed) both have, with the difference (the method minus {base}) and its 95% bootstrap "
+        "interval (each cell's episodes resampled on their own, so where both methods played the same episodes a "
+        "paired interval would be narrower):",
+        "",
+        f"| method | train cells | P_T of {base} | P_T of the method | difference | 95% interval |",
+        "|---|---|---|---|---|---|",
+    ]
+    for method, (base_pt, own, diff) in found.items():
+        shared = shared_cell_count(grid, [base, method])
+        lines.append(
+            f"| {method} | {shared} | {base_pt[0]:.3f} {ci(*base_pt[1:], sign=False)} | {own[0]:.3f} {ci(*own[1:], sign=False)} | "
+            f"{diff[0]:+.3f} | {ci(*diff[1:])} |"
+        )
     lines.append("")
     return lines
 

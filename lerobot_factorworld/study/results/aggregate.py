@@ -383,6 +383,29 @@ def method_gap_differences(
     return {(m, label): out[(m, label)] for m in methods[1:] for label in labels if (m, label) in out}
 
 
+def method_success_differences(
+    rows: Sequence[dict], methods: Sequence[str]
+) -> dict[str, tuple[Interval, Interval, Interval]]:
+    """Every method after the first against the first on the training environments: P_T of the first, of this one
+    (each the mean success over tasks and N per seed, then over seeds) and their difference (this minus the first),
+    each with its 95% seed-bootstrap interval, on the (task, N, seed) train cells both have. The gap differences
+    are read with it: a gap cannot exceed P_T, so a method whose P_T is lower has less gap to lose."""
+    grid = [r for r in main_grid(rows) if r["condition"] == TRAIN_SUITE]
+    out = {}
+    for method in methods[1:]:
+        table = cells(shared_cell_rows(grid, [methods[0], method]))
+        groups = [[i for i, k in enumerate(table.keys) if k[0] == m] for m in (methods[0], method)]
+        if not all(groups):
+            continue
+        point, reps = table.bootstrap(lambda r, n, g=groups: group_mean(r, g))
+        base, own, diff = _interval(
+            np.array([point[0], point[1], point[1] - point[0]]),
+            np.stack([reps[:, 0], reps[:, 1], reps[:, 1] - reps[:, 0]], axis=-1),
+        )
+        out[method] = (base, own, diff)
+    return out
+
+
 def _cell_of(row: dict) -> tuple:
     """The cell a main-grid row is, less its method: (task, N, seed, condition); the main grid has the default
     widths only."""
