@@ -134,7 +134,7 @@ def test_the_comparisons_docs_rt1_quotes_are_what_the_command_prints_from_the_co
 
     doc = (ROOT / "docs" / "rt1.md").read_text()
     quotes = re.findall(r"```bash\n(factorworld compare-curves [^\n]+)\n```\n```\n(.*?)\n```\n", doc, re.S)
-    assert len(quotes) >= 3, "docs/rt1.md quotes the language's and the demos' comparisons"
+    assert len(quotes) >= 6, "docs/rt1.md quotes the language's and the demos' comparisons, on 30 and on 120 episodes"
     assert any("--family=" in command for command, _ in quotes), "and the declared finding's"
     for command, quoted in quotes:
         argv = [arg.replace("docs/results", str(ROOT / "docs" / "results")) for arg in command.split()]
