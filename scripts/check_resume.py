@@ -62,20 +62,28 @@ def main() -> None:
         return subprocess.Popen(commands[run], env=env, stdout=log, stderr=subprocess.STDOUT, start_new_session=True)
 
     whole, killed = start("uninterrupted"), start("killed")
-    while killed.poll() is None and not any(s >= args.kill_after for s in saved_steps(studies["killed"])):
-        time.sleep(0.01)
-    if killed.poll() is not None:
-        raise SystemExit(f"error: the study ended before saving step {args.kill_after}; see {args.out}/killed.log")
-    os.killpg(killed.pid, signal.SIGKILL)
-    killed.wait()
-    print(f"killed with saves {saved_steps(studies['killed'])}", flush=True)
-    rerun = start("killed")
-    for proc, run in ((rerun, "killed"), (whole, "uninterrupted")):
-        if proc.wait() != 0:
-            raise SystemExit(f"error: the {run} study failed; see {args.out}/{run}.log")
+    try:
+        while killed.poll() is None and not any(s >= args.kill_after for s in saved_steps(studies["killed"])):
+            time.sleep(0.01)
+        if killed.poll() is not None:
+            raise SystemExit(f"error: the study ended before saving step {args.kill_after}; see {args.out}/killed.log")
+        os.killpg(killed.pid, signal.SIGKILL)
+        killed.wait()
+        print(f"killed with saves {saved_steps(studies['killed'])}", flush=True)
+        rerun = start("killed")
+        for proc, run in ((rerun, "killed"), (whole, "uninterrupted")):
+            if proc.wait() != 0:
+                raise SystemExit(f"error: the {run} study failed; see {args.out}/{run}.log")
+    finally:  # never leave the uninterrupted study running behind an error
+        if whole.poll() is None:
+            os.killpg(whole.pid, signal.SIGKILL)
     a, b = final_checkpoint(studies["uninterrupted"]), final_checkpoint(studies["killed"])
     same = True
-    for name in sorted(p.relative_to(a) for p in a.rglob("*") if p.is_file()):
+    for name in sorted({p.relative_to(c) for c in (a, b) for p in c.rglob("*") if p.is_file()}):
+        if not (a / name).is_file() or not (b / name).is_file():
+            same = False
+            print(f"DIFFERS {name} (only in {'the killed run' if (b / name).is_file() else 'the uninterrupted run'})")
+            continue
         mine, theirs = (b / name).read_bytes(), (a / name).read_bytes()
         if name.name == "train_config.json":
             theirs = theirs.replace(str(studies["uninterrupted"]).encode(), str(studies["killed"]).encode())
