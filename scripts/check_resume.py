@@ -24,14 +24,17 @@ from pathlib import Path
 
 import yaml
 
+from lerobot_factorworld.study.run.train_state import saved_steps
 
-def saved_steps(study: Path) -> list[int]:
-    return sorted(int(d.name) for d in study.glob("steps/train/*/train/checkpoints/*") if d.name.isdigit())
+
+def saves(study: Path) -> dict[int, Path]:
+    """The study's complete training saves (its one training's), by step: a save still being written is not one."""
+    return {step: folder for train in study.glob("steps/train/*/train") for step, folder in saved_steps(train).items()}
 
 
 def final_checkpoint(study: Path) -> Path:
-    (folder,) = (study / "steps" / "train").iterdir()
-    return folder / "train" / "checkpoints" / f"{max(saved_steps(study)):06d}"
+    found = saves(study)
+    return found[max(found)]
 
 
 def main() -> None:
@@ -63,13 +66,13 @@ def main() -> None:
 
     whole, killed = start("uninterrupted"), start("killed")
     try:
-        while killed.poll() is None and not any(s >= args.kill_after for s in saved_steps(studies["killed"])):
+        while killed.poll() is None and not any(s >= args.kill_after for s in saves(studies["killed"])):
             time.sleep(0.01)
         if killed.poll() is not None:
             raise SystemExit(f"error: the study ended before saving step {args.kill_after}; see {args.out}/killed.log")
         os.killpg(killed.pid, signal.SIGKILL)
         killed.wait()
-        print(f"killed with saves {saved_steps(studies['killed'])}", flush=True)
+        print(f"killed with saves {sorted(saves(studies['killed']))}", flush=True)
         rerun = start("killed")
         for proc, run in ((rerun, "killed"), (whole, "uninterrupted")):
             if proc.wait() != 0:

@@ -559,11 +559,9 @@ def _methods_success_table(base: str, methods: list[str], rows: list[dict]) -> l
         "|---|---|---|---|---|---|",
     ]
     for method, (base_pt, own, diff) in found.items():
+        base_text, own_text = (f"{p[0]:.3f} {ci(*p[1:], sign=False)}" for p in (base_pt, own))
         shared = shared_cell_count(grid, [base, method])
-        lines.append(
-            f"| {method} | {shared} | {base_pt[0]:.3f} {ci(*base_pt[1:], sign=False)} | {own[0]:.3f} {ci(*own[1:], sign=False)} | "
-            f"{diff[0]:+.3f} | {ci(*diff[1:])} |"
-        )
+        lines.append(f"| {method} | {shared} | {base_text} | {own_text} | {diff[0]:+.3f} | {ci(*diff[1:])} |")
     lines.append("")
     return lines
 
