@@ -22,6 +22,7 @@ from lerobot_factorworld.policies.common.efficientnet_lite import LITE0_STAGES, 
 from lerobot_factorworld.policies.common.language import LANGUAGE_EMBEDDING_KEY, MINILM_DIM
 from lerobot_factorworld.policies.rt1.configuration_rt1 import PRESETS, RT1Config
 from lerobot_factorworld.policies.rt1.film_efficientnet import FiLM, FiLMEfficientNet
+from lerobot_factorworld.policies.rt1.frozen_trunk import FrozenTrunkFiLMEncoder
 from lerobot_factorworld.policies.rt1.modeling_rt1 import RT1Policy, photometric
 from lerobot_factorworld.policies.rt1.processor_rt1 import make_rt1_pre_post_processors
 from lerobot_factorworld.policies.rt1.tokenizers import ActionTokenizer
@@ -168,11 +169,93 @@ def test_presets_are_named_and_sized():
     for name in ("small", "rt1"):
         policy = make_policy(preset=name)
         counts[name] = sum(p.numel() for p in policy.parameters())
-    assert set(PRESETS) == {"rt1", "lite0", "small"}
+    assert set(PRESETS) == {"rt1", "lite0", "small", "lite0_frozen"}
     assert 30e6 < counts["rt1"] < 40e6  # the paper: about 35M
     assert counts["small"] < 2e6
-    with pytest.raises(ValueError, match="valid presets: rt1, lite0, small"):
+    with pytest.raises(ValueError, match="valid presets: rt1, lite0, small, lite0_frozen"):
         make_policy(preset="huge")
+
+
+def test_faithful_presets_keep_film_inside_a_trainable_backbone():
+    for name in ("small", "lite0"):
+        config = make_policy(preset=name).config
+        assert not config.frozen_backbone and config.photometric and config.crop == "shift"
+        assert (config.trunk_blocks, config.head_blocks, config.feature_shift) == (0, 0, 0)
+    policy = make_policy(preset="small")
+    assert isinstance(policy.model.encoder, FiLMEfficientNet)
+    assert all(p.requires_grad for p in policy.parameters())
+
+
+def test_frozen_trunk_is_imagenet_lite0_never_trains_and_runs_once_per_frame():
+    policy = make_policy(preset="lite0_frozen")
+    encoder = policy.model.encoder
+    assert isinstance(encoder, FrozenTrunkFiLMEncoder) and encoder.trunk.out_channels == 112  # stride-16 stage
+    imagenet = torch.load(EfficientnetLite0ModelFile.get_model_file_path(), map_location="cpu", weights_only=True)
+    trunk_before = {k: v.clone() for k, v in encoder.trunk.state_dict().items()}
+    assert torch.equal(trunk_before["blocks.10._project_conv.weight"], imagenet["_blocks.10._project_conv.weight"])
+    assert not any(p.requires_grad for p in encoder.trunk.parameters())
+    optimizer = torch.optim.AdamW([p for p in policy.parameters() if p.requires_grad], lr=1e-2)
+    pool = frame(4, seed=1)[CAMERA]
+    batch = {
+        CAMERA: pool[torch.tensor([[0, 1, 2, 3, 0, 1], [3, 2, 1, 0, 3, 2]])],  # (2, 6, 3, 84, 84): 4 distinct frames
+        LANGUAGE_EMBEDDING_KEY: torch.randn(2, 384),
+        "action": torch.rand(2, 6, 4) * 2 - 1,
+    }
+    policy.train()
+    for _ in range(2):
+        loss, _ = policy.forward(batch)
+        loss.backward()
+        optimizer.step()
+        optimizer.zero_grad()
+    assert not encoder.trunk.training  # eval mode: BatchNorm keeps ImageNet's statistics
+    assert all(torch.equal(v, trunk_before[k]) for k, v in encoder.trunk.state_dict().items())
+    # 4 distinct frames: the first step computes its 12 (a batch is looked up before it is stored), the second none
+    assert (len(encoder.cache), encoder.cache.misses, encoder.cache.hits) == (4, 12, 12)
+    with torch.no_grad():  # the cached map is the trunk's own
+        assert torch.equal(encoder.cache(pool, encoder.trunk), encoder.trunk(pool))
+    # language enters after the trunk: after training, another instruction gives other tokens for the same frame
+    policy.eval()
+    with torch.no_grad():
+        tokens = [policy.model.frame_tokens({CAMERA: pool[:1]}, torch.randn(1, 384)) for _ in range(2)]
+    assert not torch.allclose(tokens[0], tokens[1])
+    policy.load_state_dict(policy.state_dict())
+    assert len(encoder.cache) == 0  # loaded weights forget every cached map
+
+
+def test_frozen_trunk_shifts_the_feature_map_not_the_pixels():
+    encoder = make_policy(preset="lite0_frozen").model.encoder
+    maps = torch.arange(2 * 3 * 8 * 8, dtype=torch.float32).view(2, 3, 8, 8)
+    torch.manual_seed(3)
+    shifted = random_shift(maps, encoder.feature_shift)
+    assert encoder.feature_shift == 1 and not torch.equal(shifted, maps)
+    assert set(torch.unique(shifted).tolist()) <= set(maps.unique().tolist())  # a translation with edge cells repeated
+
+
+def test_frozen_trunk_settings_are_checked_in_the_config():
+    for overrides, message in [
+        (dict(preset="lite0_frozen", crop="shift"), "pixels are not augmented"),
+        (dict(preset="lite0_frozen", photometric=True), "pixels are not augmented"),
+        (dict(preset="small", frozen_backbone=True), "needs backbone=efficientnet_lite0"),
+        (dict(preset="lite0_frozen", trunk_blocks=17), "trunk_blocks must be in 1..16"),
+        (dict(preset="lite0_frozen", feature_cache_size=-1), "feature_cache_size must be >= 0"),
+    ]:
+        with pytest.raises(ValueError, match=message):
+            make_policy(**overrides)
+
+
+def test_a_frozen_trunk_checkpoint_reloads_to_the_same_actions(tmp_path):
+    policy = make_policy(preset="lite0_frozen")
+    with torch.no_grad():
+        for p in policy.parameters():
+            if p.requires_grad:
+                p.add_(0.01 * torch.randn_like(p))  # FiLM away from the identity, so language matters
+    policy.save_pretrained(tmp_path)
+    loaded = RT1Policy.from_pretrained(tmp_path)
+    assert loaded.config.frozen_backbone and loaded.config.trunk_blocks == 11
+    policy.reset()
+    loaded.reset()
+    for seed in range(3):
+        assert torch.equal(policy.select_action(frame(2, seed)), loaded.select_action(frame(2, seed)))
 
 
 def test_lite0_backbone_loads_the_packaged_imagenet_weights_offline():

@@ -51,7 +51,7 @@ class BCConfig(PreTrainedConfig):
         latent_dim: Linear layer after the CNN (paper: 128), followed by LayerNorm and tanh.
         hidden_dim / mlp_layers: The head (paper: three layers of 256 units; the last outputs the action).
         feature_cache_size: Frozen encoders only: features of up to this many training frames are kept in
-            memory, keyed by the frame's pixels (0 disables; see ``feature_cache.py``).
+            memory, keyed by the frame's pixels (0 disables; see ``policies/common/feature_cache.py``).
         use_language: Concatenate the instruction's MiniLM embedding (``observation.language.embedding``,
             added by a processor step) to the state, for language-conditioned tasks.
         speed: ``default`` (float32, the images in their default layout: every existing result) or ``fast``

@@ -3,7 +3,7 @@
 - ``ConvEncoder``: the paper's CNN (Sekar et al. 2020's encoder, as in KitchenShift): four 4x4
   convolutions with 32/64/128/128 filters, stride 2, ReLU; flatten; linear to 128; LayerNorm; tanh.
 - ``PretrainedEncoder``: a frozen backbone (``backbones.py``) followed by a trainable BatchNorm, as the
-  paper does for R3M and CLIP; its features may come from a per-frame cache (``feature_cache.py``).
+  paper does for R3M and CLIP; its features may come from a per-frame cache (``policies/common/feature_cache.py``).
 """
 
 from __future__ import annotations
@@ -11,8 +11,8 @@ from __future__ import annotations
 import torch
 from torch import Tensor, nn
 
+from ..common.feature_cache import FeatureCache
 from .backbones import FrozenBackbone
-from .feature_cache import FeatureCache
 
 
 class ConvEncoder(nn.Module):

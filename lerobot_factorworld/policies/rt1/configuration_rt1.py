@@ -11,6 +11,8 @@ preset      backbone / transformer                              for
 ``lite0``   FiLM-EfficientNet-Lite0 @128 px with packaged        a pretrained backbone that works offline
             ImageNet weights, 4 layers x d256
 ``small``   tiny FiLM-MBConv net @84 px, 2 layers x d128         2 CPU cores: tests and the embedded demo
+``lite0_    frozen ImageNet Lite0 trunk @128 px computed once     2 CPU cores: a pretrained trunk within a
+frozen``    per frame, FiLM after it; 2 layers x d128            CPU budget (``frozen_trunk.py``)
 ==========  ==================================================  =========================================
 
 ``factorworld rt1-presets`` prints each preset's parameter count.
@@ -28,6 +30,7 @@ from ..common.config import default_normalization_mapping, require_images_and_ac
 from ..common.language import MINILM_DIM
 from ..common.speed import check_speed
 from .film_efficientnet import BACKBONES
+from .frozen_trunk import LITE0_BLOCKS
 
 PRESETS: dict[str, dict] = {
     "rt1": dict(
@@ -72,7 +75,28 @@ PRESETS: dict[str, dict] = {
         crop="shift",
         optimizer_lr=3e-4,
     ),
+    "lite0_frozen": dict(
+        backbone="efficientnet_lite0",
+        pretrained_backbone=True,
+        frozen_backbone=True,
+        trunk_blocks=11,  # through Lite0's 112-channel stage: stride 16, an 8 x 8 map at 128 px
+        head_blocks=1,
+        image_size=128,
+        token_dim=128,
+        dim=128,
+        layers=2,
+        heads=4,
+        head_dim=32,
+        ffn="mlp",
+        ffn_dim=256,
+        crop="none",  # pixels stay as rendered (the cache's key); the map is shifted instead (feature_shift)
+        photometric=False,
+        feature_shift=1,
+        optimizer_lr=3e-4,
+    ),
 }
+# What the faithful presets (FiLM inside a trainable backbone) leave as they always were.
+PRESET_DEFAULTS: dict = dict(frozen_backbone=False, trunk_blocks=0, head_blocks=0, feature_shift=0, photometric=True)
 CROPS = ("shift", "random_resized", "none")
 
 
@@ -82,7 +106,7 @@ class RT1Config(PreTrainedConfig):
     """RT-1 policy configuration.
 
     Attributes:
-        preset: Named architecture (``rt1``, ``lite0``, ``small``) filling the fields left ``None``.
+        preset: Named architecture (``rt1``, ``lite0``, ``small``, ``lite0_frozen``) filling the fields left ``None``.
         n_obs_steps: History length (RT-1: 6 frames); actions are predicted for every step.
         action_bins: Uniform bins per action dimension (RT-1: 256), over the min-max normalised range.
         num_tokens: TokenLearner tokens per frame and camera (RT-1: 8).
@@ -92,14 +116,24 @@ class RT1Config(PreTrainedConfig):
             ``pretrained_backbone``, and an explicit ``pretrained_backbone=false`` next to it is refused), loaded
             strictly when a policy is built fresh. ``from_pretrained`` does not read it: the checkpoint holds
             the trained backbone.
+        frozen_backbone: Freeze the pretrained trunk (``efficientnet_lite0`` only) and compute its feature map once
+            per frame: language then enters by FiLM after the trunk, not inside it (``frozen_trunk.py``). False for
+            the faithful presets.
+        trunk_blocks: Frozen trunk only: how many of Lite0's 16 MBConv blocks it keeps (11: through the stride-16
+            stage).
+        head_blocks: Frozen trunk only: trainable residual 1x1 blocks after it, each followed by FiLM.
+        feature_shift: Frozen trunk only: training shift of the cached feature map, in cells (0: none).
+        feature_cache_size: Frozen trunk only: trunk feature maps of up to this many training frames kept in
+            memory, keyed by the frame's pixels (0 disables; ``policies/common/feature_cache.py``).
         image_size: Side the frames are resized to before the backbone.
         token_dim: Channels of the FiLM-EfficientNet output (1x1 conv) and of each image token.
         dim / layers / heads / head_dim / ffn / ffn_dim / dropout: the transformer (RT-1: 8 heads of 128 on
             d512; ``ffn="rt1"``: the reference's single linear feed-forward layer).
-        crop: Training crop augmentation: ``shift`` (pad ``crop_pad`` px and crop back, for small images),
+        crop: Training crop augmentation of the pixels (``none`` with a frozen trunk): ``shift`` (pad ``crop_pad`` px and crop back, for small images),
             ``random_resized`` (random ``crop_scale`` crop of the full frame, resized; center crop at eval)
             or ``none``.
-        photometric: Brightness shift in [-0.125, 0.125], contrast and saturation factors in [0.5, 1.5].
+        photometric: Brightness shift in [-0.125, 0.125], contrast and saturation factors in [0.5, 1.5] (off with a
+            frozen trunk). ``None`` takes the preset's (on, except ``lite0_frozen``).
         token_reuse: At inference, tokenize only the new frame and reuse the window's earlier tokens.
         language_dim: Size of the instruction embedding the FiLM layers take; must be 384 (``MINILM_DIM``),
             what RT-1's language step (MiniLM-L6, the only encoder shipped offline) gives.
@@ -117,6 +151,11 @@ class RT1Config(PreTrainedConfig):
     backbone: str | None = None
     pretrained_backbone: bool | None = None
     backbone_weights_path: str | None = None
+    frozen_backbone: bool | None = None
+    trunk_blocks: int | None = None
+    head_blocks: int | None = None
+    feature_shift: int | None = None
+    feature_cache_size: int = 100_000
     image_size: int | None = None
     token_dim: int | None = None
     dim: int | None = None
@@ -129,7 +168,7 @@ class RT1Config(PreTrainedConfig):
     crop: str | None = None
     crop_pad: int = 4
     crop_scale: float = 0.9
-    photometric: bool = True
+    photometric: bool | None = None
     token_reuse: bool = True
     language_dim: int = MINILM_DIM
     speed: str = "default"
@@ -144,7 +183,7 @@ class RT1Config(PreTrainedConfig):
             raise ValueError(f"unknown RT-1 preset {self.preset!r}; valid presets: {', '.join(PRESETS)}")
         self._resolve_backbone_start()
         names = {f.name for f in fields(self)}
-        for key, value in PRESETS[self.preset].items():
+        for key, value in {**PRESET_DEFAULTS, **PRESETS[self.preset]}.items():
             assert key in names, key
             if getattr(self, key) is None:
                 setattr(self, key, value)
@@ -153,6 +192,7 @@ class RT1Config(PreTrainedConfig):
         if self.n_obs_steps < 1 or self.action_bins < 2:
             raise ValueError("n_obs_steps must be >= 1 and action_bins >= 2")
         self._check_backbone_weights()
+        self._check_frozen_trunk()
         self._check_action_normalization()
         self._check_language_dim()
 
@@ -196,6 +236,29 @@ class RT1Config(PreTrainedConfig):
                 "efficientnet_b3 ImageNet weights are not shipped: pass backbone_weights_path=<local torchvision "
                 "efficientnet_b3 state dict>, or use backbone=efficientnet_lite0 for offline pretrained weights"
             )
+
+    def _check_frozen_trunk(self) -> None:
+        """A frozen trunk is a pretrained Lite0 whose input pixels are never augmented (they key its cache)."""
+        if self.frozen_backbone:
+            if self.backbone != "efficientnet_lite0" or not self.pretrained_backbone:
+                raise ValueError(
+                    "frozen_backbone=true needs backbone=efficientnet_lite0 with pretrained_backbone=true (a frozen "
+                    f"random trunk learns nothing); got backbone={self.backbone!r}, "
+                    f"pretrained_backbone={self.pretrained_backbone}"
+                )
+            if self.crop != "none" or self.photometric:
+                raise ValueError(
+                    f"frozen_backbone=true computes each frame's trunk features once, so pixels are not augmented: "
+                    f"crop={self.crop!r} and photometric={self.photometric} must be 'none' and false "
+                    "(feature_shift shifts the cached feature map instead)"
+                )
+            if not 1 <= self.trunk_blocks <= LITE0_BLOCKS or self.head_blocks < 0 or self.feature_shift < 0:
+                raise ValueError(
+                    f"trunk_blocks must be in 1..{LITE0_BLOCKS}, head_blocks and feature_shift >= 0; got "
+                    f"{self.trunk_blocks}, {self.head_blocks}, {self.feature_shift}"
+                )
+        if self.feature_cache_size < 0:
+            raise ValueError(f"feature_cache_size must be >= 0; got {self.feature_cache_size}")
 
     def _check_action_normalization(self) -> None:
         """The bins span [-1, 1], which is where MIN_MAX puts the dataset's min..max; other modes do not."""

@@ -20,6 +20,7 @@ from ..common.speed import as_float32, compute_context, is_fast
 from ..common.weights import RestoresBackboneFromCheckpoint
 from .configuration_rt1 import RT1Config
 from .film_efficientnet import FiLMEfficientNet
+from .frozen_trunk import FrozenTrunkFiLMEncoder
 from .tokenizers import ActionTokenizer, TokenLearner
 from .transformer import RT1Transformer, TransformerSpec
 
@@ -36,14 +37,27 @@ class RT1(nn.Module):
     ) -> None:
         super().__init__()
         self.config, self.camera_keys = config, camera_keys
-        self.encoder = FiLMEfficientNet(
-            config.backbone,
-            config.language_dim,
-            config.token_dim,
-            pretrained=bool(config.pretrained_backbone) and load_backbone_weights,
-            weights_path=config.backbone_weights_path,
-        )
-        if is_fast(config.speed):
+        pretrained = bool(config.pretrained_backbone) and load_backbone_weights
+        if config.frozen_backbone:
+            self.encoder = FrozenTrunkFiLMEncoder(
+                config.language_dim,
+                config.token_dim,
+                trunk_blocks=config.trunk_blocks,
+                head_blocks=config.head_blocks,
+                image_size=config.image_size,
+                feature_shift=config.feature_shift,
+                cache_size=config.feature_cache_size,
+                pretrained=pretrained,
+            )
+        else:
+            self.encoder = FiLMEfficientNet(
+                config.backbone,
+                config.language_dim,
+                config.token_dim,
+                pretrained=pretrained,
+                weights_path=config.backbone_weights_path,
+            )
+        if is_fast(config.speed) and not config.frozen_backbone:
             self.encoder.keep_depthwise_float32()
         self.token_learner = TokenLearner(config.token_dim, config.num_tokens)
         self.transformer = RT1Transformer(TransformerSpec.from_config(config, len(camera_keys), action_dim))
@@ -52,7 +66,8 @@ class RT1(nn.Module):
         """Tokens of single frames: images[cam] (M, 3, H, W), language (M, D) -> (M, N, token_dim)."""
         tokens = []
         for key in self.camera_keys:
-            x = self.prepare(images[key])
+            # a frozen trunk takes the frames as rendered: they key its cache, and it resizes them itself
+            x = images[key] if self.config.frozen_backbone else self.prepare(images[key])
             tokens.append(self.token_learner(self.encoder(x, language)))
         return torch.cat(tokens, dim=1)
 

@@ -40,6 +40,11 @@ def preset_table() -> str:
     for name, preset in PRESETS.items():
         counts = parameter_counts(name)
         pretrained = " (ImageNet, packaged)" if preset["pretrained_backbone"] else ""
+        if preset.get("frozen_backbone"):
+            pretrained = (
+                f" (ImageNet, packaged; first {preset['trunk_blocks']} blocks frozen and cached,"
+                f" then {preset['head_blocks']} FiLM blocks)"
+            )
         lines.append(
             f"| {name} | {preset['backbone']}{pretrained} | {preset['image_size']} px | {preset['layers']} x d{preset['dim']},"
             f" {preset['heads']} heads x {preset['head_dim']}, ffn {preset['ffn']} | "

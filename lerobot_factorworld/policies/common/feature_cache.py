@@ -1,11 +1,13 @@
-"""Per-frame cache of frozen-encoder features, so that a pretrained ResNet runs once per frame, not once per epoch.
+"""Per-frame cache of frozen-encoder features, so that a pretrained network runs once per frame, not once per epoch
+(bc's frozen encoders, RT-1's frozen trunk).
 
 Keyed by a 128-bit BLAKE2b digest of the frame's pixels exactly as the encoder receives them (float32,
 (3, H, W), before the encoder's own resizing), so a key never depends on dataset indices or file names
 and the same pixels always hit. Valid because a frozen backbone in eval mode is a fixed function of its
 input. The cache lives in memory with the policy (never saved); it is least-recently-used bounded by
-``feature_cache_size`` frames, only consulted in training mode with augmentation ``none`` (augmented
-pixels are new every time), and cleared whenever weights are loaded into the policy.
+``feature_cache_size`` frames, consulted by its owner only for training frames whose pixels are not augmented
+(augmented pixels are new every time: bc with augmentation ``none``; RT-1's frozen trunk, which augments the
+cached feature map instead), and cleared whenever weights are loaded into the policy.
 """
 
 from __future__ import annotations
