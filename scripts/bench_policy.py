@@ -50,26 +50,43 @@ Training speed setting (``speed``, ``policies/common/speed.py``)
     median of the per-round rates per setting, and ``fast / default`` of those medians (``--batch-size`` and
     ``--train-steps`` override these workloads too).
 
+A frozen trunk on real frames (``--frames <LeRobotDataset root>``, e.g. a pick study's collect step)
+    ``lite0_frozen`` (its trunk computed once per frame through the feature cache) against ``small`` (every frame
+    through its trainable CNN), both at ``speed=default``, on the first ``--frames-limit`` frames of the dataset
+    (whole episodes, PNG decoded once, held in memory: data loading is not timed). Each frame starts a window of
+    ``n_obs_steps`` frames padded with the episode's first frame, as LeRobot pads; the windows are shuffled once
+    (``--seed``) and cut into batches of ``--frames-batch``. Two epochs over them, batch by batch with the two
+    policies alternating (which one goes first alternates too), so both see the same load: epoch 1 is the first
+    epoch (the cache fills: every frame goes through the trunk once), epoch 2 is every epoch after it (every
+    frame a cache hit). Reported: windows/s per policy and epoch, and ``lite0_frozen / small`` per epoch.
+
     python scripts/bench_policy.py [--presets small,lite0,rt1] [--skip-slow] [--device cpu|cuda]
                                    [--rounds 3] [--train-steps N] [--infer-steps N] [--batch-size N]
                                    [--speed-preset small] [--quick]
+                                   [--frames <dataset root> [--frames-limit 1600] [--frames-batch 16]]
 
 ``--quick`` is a smoke run (small preset only, 1 round, a few iterations; the speed comparison at the small
 preset and the quick batch too). The last line printed is exactly
 ``ratio: <float>`` = the token-reuse speedup (latency OFF / latency ON) of the ``small`` preset, or of the
-first preset measured when ``small`` is not selected.
+first preset measured when ``small`` is not selected; with ``--frames-only``, ``lite0_frozen / small`` windows/s
+after the first epoch.
 """
 
 from __future__ import annotations
 
 import argparse
+import io
 import os
 import statistics
 import sys
 from dataclasses import dataclass, field
+from pathlib import Path
 
 import _bench
+import numpy as np
+import pyarrow.parquet as pq
 import torch
+from PIL import Image
 from tqdm import tqdm
 
 _bench.add_repo_to_path()
@@ -293,6 +310,119 @@ def bench_preset(preset: str, args: argparse.Namespace, bar: tqdm) -> Result:
     return result
 
 
+# --- a frozen trunk against small on real frames (--frames) ----------------------------------------
+
+FROZEN_PAIR = ("small", "lite0_frozen")  # the baseline first: the ratio is lite0_frozen / small
+
+
+@dataclass
+class FrameBench:
+    """Windows/s of each policy in FROZEN_PAIR at epoch 1 (the cache fills) and epoch 2 (every frame cached)."""
+
+    frames: int
+    windows: int
+    batch: int
+    seconds: dict[tuple[str, int], float] = field(default_factory=dict)  # (preset, epoch) -> timed seconds
+    misses: dict[int, int] = field(default_factory=dict)  # epoch -> frames the frozen trunk computed
+
+    def rate(self, preset: str, epoch: int) -> float:
+        return self.windows / self.seconds[(preset, epoch)]
+
+    def ratio(self, epoch: int) -> float:
+        return self.rate(FROZEN_PAIR[1], epoch) / self.rate(FROZEN_PAIR[0], epoch)
+
+
+def read_frames(root: Path, limit: int) -> tuple[torch.Tensor, np.ndarray]:
+    """The first whole episodes of a LeRobotDataset at ``root`` up to ``limit`` frames: frames (F, 3, H, W) in
+    [0, 1] and each frame's episode index (F,)."""
+    files = sorted((root / "data").rglob("*.parquet"))
+    if not files:
+        raise SystemExit(f"--frames {root}: no data/**/*.parquet (a LeRobotDataset root with image frames)")
+    images, episodes = [], []
+    for file in files:
+        table = pq.read_table(file, columns=[IMAGE_KEY, "episode_index"]).to_pydict()
+        for image, episode in zip(table[IMAGE_KEY], table["episode_index"], strict=True):
+            if len(images) >= limit and episode != episodes[-1]:
+                break
+            images.append(np.asarray(Image.open(io.BytesIO(image["bytes"])).convert("RGB")))
+            episodes.append(episode)
+    frames = torch.from_numpy(np.stack(images)).permute(0, 3, 1, 2).float().div(255.0)
+    return frames.contiguous(), np.asarray(episodes)
+
+
+def frame_windows(episodes: np.ndarray, steps: int) -> torch.Tensor:
+    """(F, steps) frame indices: each frame's window of ``steps`` frames, padded with its episode's first frame."""
+    starts = {}
+    for i, episode in enumerate(episodes):
+        starts.setdefault(episode, i)
+    first = np.array([starts[e] for e in episodes])
+    offsets = np.arange(1 - steps, 1)
+    return torch.from_numpy(np.maximum(np.arange(len(episodes))[:, None] + offsets, first[:, None]))
+
+
+def bench_frames(args: argparse.Namespace, bar: tqdm) -> FrameBench:
+    frames, episodes = read_frames(Path(args.frames), args.frames_limit)
+    features = {IMAGE_KEY: PolicyFeature(FeatureType.VISUAL, tuple(frames.shape[1:]))}
+    policies, optimizers = {}, {}
+    for preset in FROZEN_PAIR:
+        torch.manual_seed(args.seed)
+        cfg = RT1Config(
+            preset=preset,
+            device=args.device,
+            input_features=features,
+            output_features={"action": PolicyFeature(FeatureType.ACTION, (ACTION_DIM,))},
+        )
+        policies[preset] = RT1Policy(cfg).to(args.device).train()
+        optimizers[preset] = torch.optim.AdamW(policies[preset].get_optim_params(), lr=cfg.optimizer_lr)
+    steps = policies[FROZEN_PAIR[0]].config.n_obs_steps
+    windows = frame_windows(episodes, steps)
+    generator = torch.Generator().manual_seed(args.seed)
+    order = torch.randperm(len(windows), generator=generator)
+    language = torch.randn(int(episodes.max()) + 1, LANGUAGE_DIM, generator=generator)  # one instruction each
+    actions = torch.rand(len(windows), steps, ACTION_DIM, generator=generator) * 2 - 1
+    batches = [order[i : i + args.frames_batch] for i in range(0, len(order), args.frames_batch)]
+    result = FrameBench(len(frames), len(windows), args.frames_batch)
+    cache = policies[FROZEN_PAIR[1]].model.encoder.cache
+    clock = _bench.Clock(args.device)
+    for epoch in (1, 2):
+        misses_before = cache.misses
+        for preset in FROZEN_PAIR:
+            result.seconds[(preset, epoch)] = 0.0
+        for b, rows in enumerate(batches):
+            batch = {
+                IMAGE_KEY: frames[windows[rows]].to(args.device),
+                LANGUAGE_EMBEDDING_KEY: language[torch.from_numpy(episodes[rows.numpy()])].to(args.device),
+                "action": actions[rows].to(args.device),
+                "action_is_pad": torch.zeros(len(rows), steps, dtype=torch.bool, device=args.device),
+            }
+            for preset in _bench.round_order(FROZEN_PAIR, b):
+                bar.set_postfix_str(f"frames: epoch {epoch} {preset}")
+                start = clock()
+                _bench.optimizer_step(policies[preset], optimizers[preset], batch)
+                result.seconds[(preset, epoch)] += clock() - start
+                bar.update(1)
+        result.misses[epoch] = cache.misses - misses_before
+    return result
+
+
+def print_frame_bench(res: FrameBench, args: argparse.Namespace) -> None:
+    print()
+    print(
+        f"Frozen trunk on real frames: {res.frames} frames of {args.frames} ({res.windows} windows, batch {res.batch}), "
+        "speed=default, the two policies alternating batch by batch"
+    )
+    header = f"| {'epoch':<12} | {'small windows/s':>15} | {'lite0_frozen windows/s':>22} | {'trunk runs':>10} | {'ratio':>7} |"
+    _bench.print_table(
+        header,
+        (
+            f"| {label:<12} | {res.rate('small', epoch):>15.1f} | {res.rate('lite0_frozen', epoch):>22.1f} "
+            f"| {res.misses[epoch]:>10} | {res.ratio(epoch):>6.2f}x |"
+            for epoch, label in ((1, "1 (fills)"), (2, "2 and after"))
+        ),
+    )
+    print("trunk runs: frames lite0_frozen's trunk computed in that epoch (the rest came from its cache)")
+
+
 def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--presets", default=",".join(DEFAULT_ORDER), help="comma-separated presets, in order")
@@ -313,7 +443,15 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
         help="rt1 preset of the speed=default / speed=fast comparison",
     )
     parser.add_argument("--quick", action="store_true", help="smoke run: small preset, 1 round, few iterations")
+    parser.add_argument("--frames", default="", help="LeRobotDataset root: lite0_frozen against small on its frames")
+    parser.add_argument("--frames-limit", type=int, default=1600, help="--frames: frames read (whole episodes)")
+    parser.add_argument("--frames-batch", type=int, default=16, help="--frames: training batch (windows)")
+    parser.add_argument("--frames-only", action="store_true", help="--frames: measure only that comparison")
     args = parser.parse_args(argv)
+    if args.frames and not (Path(args.frames) / "data").is_dir():
+        parser.error(f"--frames {args.frames}: not a LeRobotDataset root (no data/ folder)")
+    if args.frames_only and not args.frames:
+        parser.error("--frames-only needs --frames")
 
     presets = _bench.parse_names(parser, args.presets, list(PRESETS), "preset(s)")
     if args.quick:
@@ -332,6 +470,18 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     return args
 
 
+def main_frames(args: argparse.Namespace) -> int:
+    """``--frames-only``: the frozen trunk against small on real frames; the last line is epoch 2's ratio."""
+    load_start = os.getloadavg()
+    with tqdm(desc="frames", unit="step", file=sys.stderr) as bar:
+        result = bench_frames(args, bar)
+    print_frame_bench(result, args)
+    print(_bench.load_average_line(load_start, os.getloadavg()))
+    print(f"lite0_frozen / small after the first epoch: {result.ratio(2):.2f}x (windows/s)")
+    print(_bench.ratio_line(result.ratio(2)))
+    return 0
+
+
 def main(argv: list[str] | None = None) -> int:
     args = parse_args(argv)
     kind = _bench.device_kind(args.device)
@@ -342,6 +492,8 @@ def main(argv: list[str] | None = None) -> int:
         flush=True,
     )
 
+    if args.frames_only:
+        return main_frames(args)
     total = 0
     for preset in args.preset_list:
         _, train_steps, infer_steps = workload(preset, args, kind)
@@ -393,6 +545,9 @@ def main(argv: list[str] | None = None) -> int:
     for res in speeds:
         rates = "; ".join(f"{speed} [{', '.join(f'{r:.2f}' for r in res.rates[speed])}]" for speed in SPEEDS)
         print(f"{res.label}: {res.unit} per round, {rates} ({res.steps} steps each)")
+    if args.frames:
+        with tqdm(total=4 * -(-args.frames_limit // args.frames_batch), desc="frames", file=sys.stderr) as bar:
+            print_frame_bench(bench_frames(args, bar), args)
     print(_bench.load_average_line(load_start, os.getloadavg()))
     headline = next((res for res in results if res.preset == "small"), results[0])
     print(f"token-reuse speedup of {headline.preset}: {headline.speedup:.2f}x (select_action latency OFF / ON)")

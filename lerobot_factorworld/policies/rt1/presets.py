@@ -43,7 +43,7 @@ def preset_table() -> str:
         if preset.get("frozen_backbone"):
             pretrained = (
                 f" (ImageNet, packaged; first {preset['trunk_blocks']} blocks frozen and cached,"
-                f" then {preset['head_blocks']} FiLM blocks)"
+                f" then {preset['head_blocks']} FiLM block{'' if preset['head_blocks'] == 1 else 's'})"
             )
         lines.append(
             f"| {name} | {preset['backbone']}{pretrained} | {preset['image_size']} px | {preset['layers']} x d{preset['dim']},"
