@@ -58,7 +58,9 @@ class FrozenLite0Trunk(nn.Module):
     @torch.no_grad()
     def forward(self, images: Tensor) -> Tensor:
         if images.shape[-1] != self.image_size or images.shape[-2] != self.image_size:
-            images = F.interpolate(images, size=(self.image_size, self.image_size), mode="bilinear", align_corners=False)
+            images = F.interpolate(
+                images, size=(self.image_size, self.image_size), mode="bilinear", align_corners=False
+            )
         x = ((images - self.mean) / self.std).contiguous(memory_format=torch.channels_last)
         x = F.relu6(self.stem_bn(self.stem_conv(x)))
         for block in self.blocks:
