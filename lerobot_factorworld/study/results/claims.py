@@ -33,25 +33,21 @@ import numpy as np
 from scipy import stats
 
 from ...protocol.conditions import PAIR_SEPARATOR, TRAIN_SUITE
-from ..metrics import (
-    group_mean,
-    nanmean,
-    ols_slope,
-    pair_metric_array,
-    percentile_interval,
-    pooled_rates,
-    two_sided_z,
-)
+from ...stats.bootstrap import percentile_interval
+from ...stats.decision import decision_interval, episodes_needed, seeds_needed
+from ...stats.estimate import Estimate
+from ...stats.multitest import HOLM, rank_levels, step_down
+from ...stats.power import difference_resolvable, mean_resolvable_gap, pair_metric_resolvable, slope_resolvable
+from ...stats.proportions import two_sided_z
+from ...stats.summaries import group_mean, nanmean, ols_slope, pair_metric_array, pooled_rates
 from ..plan.claim_config import ClaimConfig
 from ..plan.config import StudyConfig
-from ..plan.power import difference_resolvable, mean_resolvable_gap, pair_metric_resolvable, slope_resolvable
 from .aggregate import Cells, cell_gaps, cells, main_grid, radius_rows, shared_cell_rows
 
 ALPHA = 0.05
 AGREES, DISAGREES, NOT_RESOLVED, CAPPED = "agrees", "disagrees", "not resolved", "capped"
 CONFOUNDED = "confounded (P_T fell)"  # a gap resolved smaller, but only because success fell
 VERDICTS = (AGREES, DISAGREES, NOT_RESOLVED, CAPPED, CONFOUNDED)
-MAX_EPISODES = 100_000  # the search for the episodes that would resolve an effect stops here
 
 PAPER_TIERS_STATED = [
     ["camera_pos", "object_texture", "table_pos", "table_texture"],
@@ -429,17 +425,6 @@ def _p_value(c: Comparison, p_boot: float, per_seed: np.ndarray) -> float:
     return max(p_boot, p_t)
 
 
-def decision_interval(reps: np.ndarray, per_seed: np.ndarray, level: float) -> tuple[float, float]:
-    """The hull of the bootstrap's percentile interval and the t-interval over seeds at ``level`` (NaN
-    with fewer than two seeds or a bootstrap undefined too often: no seed-level interval)."""
-    lo, hi = percentile_interval(reps, level=level)
-    if len(per_seed) < 2 or not (np.isfinite(lo) and np.isfinite(hi)):
-        return math.nan, math.nan
-    half = stats.t.ppf(1 - (1 - level) / 2, df=len(per_seed) - 1) * np.std(per_seed, ddof=1) / math.sqrt(len(per_seed))
-    mean = float(np.mean(per_seed))
-    return min(float(lo), mean - half), max(float(hi), mean + half)
-
-
 def _verdict(c: Comparison, low: float, high: float, smallest: float, *, counts_known: bool) -> str:
     """``smallest`` is NaN both when the success rates leave nothing to resolve (capped) and when the episode
     counts are unknown (``counts_known`` false: no power, so an unresolved comparison stays not resolved).
@@ -462,37 +447,12 @@ def _uncapped_the_other_way(c: Comparison, point: float, smallest: float) -> boo
     return bool(leans and np.isfinite(smallest) and not (np.isfinite(c.contrary) and c.contrary < smallest))
 
 
-def _episodes_needed(c: Comparison, effect: float, z: float) -> float:
-    """Episodes per cell (at these seeds) whose power-code resolution reaches ``effect`` (NaN: none does)."""
-    if not (np.isfinite(effect) and effect > 0):
-        return math.nan
-    e = 1
-    while e <= MAX_EPISODES:
-        resolved = c.resolvable(e, z)
-        if np.isfinite(resolved) and resolved <= effect:
-            return float(e)
-        e = max(e + 1, math.ceil(e * 1.1))
-    return math.nan
-
-
-def _seeds_needed(per_seed: np.ndarray, effect: float, level: float) -> float:
-    """Seeds whose t-interval (at ``level``) at the observed spread between seeds excludes ``effect``."""
-    if len(per_seed) < 2 or not effect > 0:
-        return math.nan
-    sd = float(np.std(per_seed, ddof=1))
-    if sd == 0:
-        return float(len(per_seed))
-    for s in range(2, 1001):
-        if stats.t.ppf(1 - (1 - level) / 2, df=s - 1) * sd / math.sqrt(s) < effect:
-            return float(s)
-    return math.nan
-
-
 def _change(table: Cells, statistic: Statistic, level: float) -> tuple[float, float, float]:
     """A success change with its interval at ``level``: the decision interval (bootstrap and t, hulled), or with
     one seed the bootstrap's alone (episodes only)."""
     point, reps, per_seed = _replicates(table, statistic)
-    low, high = decision_interval(reps, per_seed, level)
+    hull = decision_interval(point, reps, per_seed, level)
+    low, high = hull.low, hull.high
     if not np.isfinite(low):  # one seed (both ends are NaN together)
         low, high = (float(x) for x in percentile_interval(reps, level=level))
     return point, float(low), float(high)
@@ -586,13 +546,13 @@ def decide_together(
     keys = list(unique)
     evidence = {key: _evidence(unique[key]) for key in keys}
     order = sorted(keys, key=lambda key: (evidence[key].p_value, evidence[key].p_bootstrap, key[1], key[0]))
-    decided: dict[tuple, Decided] = {}
-    stopped = False
-    for rank, key in enumerate(order):
-        c, ev = unique[key], evidence[key]
-        level = 1 - ALPHA / (len(order) - rank)
-        decided[key], resolved = _decide_one(c, ev, level, stopped)
-        stopped = stopped or not resolved
+    levels = [1 - a for a in rank_levels(len(order), ALPHA, HOLM)]  # Holm: the k-th smallest p at ALPHA / (m - k)
+    first = [_interval(unique[key], evidence[key], level) for key, level in zip(order, levels)]
+    held = step_down([looked.verdict in (AGREES, DISAGREES) for looked in first])  # Holm's step-down
+    decided = {
+        key: _decide_one(unique[key], evidence[key], looked, rejected)
+        for key, looked, rejected in zip(order, first, held)
+    }
     out: list[list[ClaimVerdict]] = []
     for i, part in enumerate(parts):
         mine = []
@@ -603,19 +563,36 @@ def decide_together(
     return out
 
 
-def _decide_one(c: Comparison, ev: _Evidence, level: float, stopped: bool) -> tuple[Decided, bool]:
-    """One comparison at its Holm level: its :class:`Decided` and whether its null was rejected (the gap resolved
-    either way; a confounded shrink's gap did shrink, so Holm goes on)."""
-    low, high = decision_interval(ev.reps, ev.per_seed, level)
+@dataclass(frozen=True)
+class _Looked:
+    """A comparison at its Holm level, before the step-down: its decision interval and its verdict on it alone."""
+
+    level: float
+    interval: Estimate
+    z: float
+    smallest: float
+    verdict: str
+
+
+def _interval(c: Comparison, ev: _Evidence, level: float) -> _Looked:
+    """One comparison at its own level: its decision interval and the verdict that interval gives, as if it were
+    the only comparison (the step-down may yet leave it not resolved)."""
+    interval = decision_interval(ev.point, ev.reps, ev.per_seed, level)
     z = two_sided_z(level)
     episodes = _episodes(c.table)
     smallest = c.resolvable(episodes, z) if np.isfinite(episodes) else math.nan  # counts unknown: no power
-    verdict = _verdict(c, low, high, smallest, counts_known=bool(np.isfinite(episodes)))
+    verdict = _verdict(c, interval.low, interval.high, smallest, counts_known=bool(np.isfinite(episodes)))
     if verdict == CAPPED and _uncapped_the_other_way(c, ev.point, smallest):
         verdict = NOT_RESOLVED  # it cannot agree, but it may yet disagree
-    if stopped and verdict in (AGREES, DISAGREES):
+    return _Looked(level, interval, z, smallest, verdict)
+
+
+def _decide_one(c: Comparison, ev: _Evidence, looked: _Looked, rejected: bool) -> Decided:
+    """One comparison decided: ``rejected`` is Holm's step-down on its null (false once an earlier comparison was
+    left unresolved, so it is not resolved either; a confounded shrink's gap did shrink, so Holm goes on past it)."""
+    level, verdict, smallest = looked.level, looked.verdict, looked.smallest
+    if not rejected and verdict in (AGREES, DISAGREES):
         verdict = NOT_RESOLVED  # Holm: nothing after the first comparison left unresolved is resolved
-    resolved = verdict in (AGREES, DISAGREES)
     p_t = p_f = None
     forced = False
     if c.success is not None:
@@ -624,13 +601,13 @@ def _decide_one(c: Comparison, ev: _Evidence, level: float, stopped: bool) -> tu
         if _confounded(verdict, forced, p_t, p_f):
             verdict = CONFOUNDED
     effect = abs(ev.point - c.threshold)
-    decided = Decided(
-        c.label, c.threshold, c.sign, ev.point, low, high, level, ev.p_value, verdict, c.headroom, smallest,
-        _episodes_needed(c, effect, z), _seeds_needed(ev.per_seed, effect, level), len(ev.per_seed),
+    return Decided(
+        c.label, c.threshold, c.sign, ev.point, looked.interval.low, looked.interval.high, level, ev.p_value,
+        verdict, c.headroom, smallest, episodes_needed(c.resolvable, effect, looked.z),
+        seeds_needed(ev.per_seed, effect, level), len(ev.per_seed),
         tuple(float(x) for x in percentile_interval(ev.reps, level=level)), c.contrary,
         int(np.sum(~np.isnan(c.table.rates))), p_t, p_f, forced,
     )  # fmt: skip
-    return decided, resolved
 
 
 def combine(verdicts: Sequence[str]) -> str:

@@ -1,0 +1,64 @@
+"""The interval a verdict is decided on, and the sample sizes that would resolve an effect it leaves open.
+
+Why a hull: at few training seeds the bootstrap's percentile interval is too narrow (it cannot see more spread
+between seeds than the seeds it has), and the t-interval over seeds ignores episode noise within each; the wider of
+the two, both ways, is honest for both.
+
+References: the percentile interval, Efron & Tibshirani (1993), "An Introduction to the Bootstrap", ch. 13; the
+t-interval and the seeds it needs, Student (1908), "The probable error of a mean", Biometrika 6(1).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+
+import numpy as np
+from scipy import stats
+
+from .bootstrap import percentile_interval
+from .estimate import Estimate
+
+HULL = "bootstrap-t hull"  # the decision interval's method
+MAX_EPISODES = 100_000  # the search for the episodes that would resolve an effect stops here
+MAX_SEEDS = 1000  # ... and for the seeds
+
+
+def decision_interval(point: float, reps: np.ndarray, per_seed: np.ndarray, level: float) -> Estimate:
+    """The hull of Efron & Tibshirani's (1993) percentile interval of the bootstrap ``reps`` and Student's
+    t-interval over the ``per_seed`` values at ``level``, around ``point`` (NaN ends with fewer than two seeds or a
+    bootstrap undefined too often: no seed-level interval)."""
+    lo, hi = percentile_interval(reps, level=level)
+    if len(per_seed) < 2 or not (np.isfinite(lo) and np.isfinite(hi)):
+        return Estimate(point, math.nan, math.nan, level, HULL)
+    half = stats.t.ppf(1 - (1 - level) / 2, df=len(per_seed) - 1) * np.std(per_seed, ddof=1) / math.sqrt(len(per_seed))
+    mean = float(np.mean(per_seed))
+    return Estimate(point, min(float(lo), mean - half), max(float(hi), mean + half), level, HULL)
+
+
+def episodes_needed(resolvable: Callable[[float, float], float], effect: float, z: float) -> float:
+    """Episodes per cell whose resolution ``resolvable(episodes, z)`` (a :mod:`.power` function of the design)
+    reaches ``effect``, searched from 1 in steps of 10% up to ``MAX_EPISODES`` (NaN: none does)."""
+    if not (np.isfinite(effect) and effect > 0):
+        return math.nan
+    e = 1
+    while e <= MAX_EPISODES:
+        resolved = resolvable(e, z)
+        if np.isfinite(resolved) and resolved <= effect:
+            return float(e)
+        e = max(e + 1, math.ceil(e * 1.1))
+    return math.nan
+
+
+def seeds_needed(per_seed: np.ndarray, effect: float, level: float) -> float:
+    """Seeds whose Student (1908) t-interval at ``level``, at the observed spread of ``per_seed``, has a half-width
+    below ``effect`` (NaN with fewer than two seeds, or none up to ``MAX_SEEDS``)."""
+    if len(per_seed) < 2 or not effect > 0:
+        return math.nan
+    sd = float(np.std(per_seed, ddof=1))
+    if sd == 0:
+        return float(len(per_seed))
+    for s in range(2, MAX_SEEDS + 1):
+        if stats.t.ppf(1 - (1 - level) / 2, df=s - 1) * sd / math.sqrt(s) < effect:
+            return float(s)
+    return math.nan
