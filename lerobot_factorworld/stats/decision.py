@@ -20,8 +20,7 @@ from .bootstrap import percentile_interval
 from .estimate import Estimate
 
 HULL = "bootstrap-t hull"  # the decision interval's method
-MAX_EPISODES = 100_000  # the search for the episodes that would resolve an effect stops here
-MAX_SEEDS = 1000  # ... and for the seeds
+MAX_EPISODES = 100_000  # the search for the episodes that would resolve an effect stops here (for seeds: 1000)
 
 
 def decision_interval(point: float, reps: np.ndarray, per_seed: np.ndarray, level: float) -> Estimate:
@@ -52,13 +51,13 @@ def episodes_needed(resolvable: Callable[[float, float], float], effect: float, 
 
 def seeds_needed(per_seed: np.ndarray, effect: float, level: float) -> float:
     """Seeds whose Student (1908) t-interval at ``level``, at the observed spread of ``per_seed``, has a half-width
-    below ``effect`` (NaN with fewer than two seeds, or none up to ``MAX_SEEDS``)."""
+    below ``effect`` (NaN with fewer than two seeds, or none up to 1000)."""
     if len(per_seed) < 2 or not effect > 0:
         return math.nan
     sd = float(np.std(per_seed, ddof=1))
     if sd == 0:
         return float(len(per_seed))
-    for s in range(2, MAX_SEEDS + 1):
+    for s in range(2, 1001):
         if stats.t.ppf(1 - (1 - level) / 2, df=s - 1) * sd / math.sqrt(s) < effect:
             return float(s)
     return math.nan
