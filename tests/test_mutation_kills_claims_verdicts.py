@@ -59,7 +59,7 @@ def bare(threshold=0.0, sign=+1, headroom=math.nan, resolvable=None) -> Comparis
     ids=["one replicate at the threshold, below it none", "one at it, one above it"],
 )
 def test_the_bootstrap_p_value_counts_replicates_at_the_threshold_on_both_sides(reps, expected):
-    assert claims._p_bootstrap(bare(threshold=0.5), np.array(reps)) == pytest.approx(expected, abs=1e-12)
+    assert decision.bootstrap_p_value(np.array(reps), 0.5) == pytest.approx(expected, abs=1e-12)
 
 
 @pytest.mark.parametrize(
@@ -72,7 +72,7 @@ def test_the_bootstrap_p_value_counts_replicates_at_the_threshold_on_both_sides(
     ids=["a quarter defined", "two fifths defined", "half defined"],
 )
 def test_the_bootstrap_p_value_needs_half_the_replicates_defined(reps, expected):
-    assert claims._p_bootstrap(bare(threshold=0.5), np.array(reps)) == pytest.approx(expected, abs=1e-12)
+    assert decision.bootstrap_p_value(np.array(reps), 0.5) == pytest.approx(expected, abs=1e-12)
 
 
 # --- the p-value: the larger of the bootstrap's and the t-test's --------------------------------------------------
@@ -82,8 +82,8 @@ def test_the_p_value_is_the_t_tests_from_two_seeds_on():
     """Two seeds 0.1 and 0.3 against 0.1: mean 0.2, sd 0.1 * sqrt(2), standard error 0.1, t = 1 with one degree
     of freedom (a Cauchy: P(T > 1) = 1/4), so p_t = 0.5 > the bootstrap's 0.01. One seed: no t-test, p = 1."""
     c = bare(threshold=0.1)
-    assert claims._p_value(c, 0.01, np.array([0.1, 0.3])) == pytest.approx(0.5, abs=1e-12)
-    assert claims._p_value(c, 0.01, np.array([0.3])) == 1.0
+    assert decision.decision_p_value(0.01, np.array([0.1, 0.3]), c.threshold) == pytest.approx(0.5, abs=1e-12)
+    assert decision.decision_p_value(0.01, np.array([0.3]), c.threshold) == 1.0
 
 
 @pytest.mark.parametrize(
@@ -96,7 +96,7 @@ def test_the_p_value_is_the_t_tests_from_two_seeds_on():
     ids=["off the threshold", "1 off the threshold", "at the threshold"],
 )
 def test_seeds_without_spread_give_a_t_test_p_value_of_0_off_the_threshold_and_1_on_it(per_seed, expected):
-    assert claims._p_value(bare(threshold=0.1), 0.01, np.array(per_seed)) == pytest.approx(expected, abs=1e-12)
+    assert decision.decision_p_value(0.01, np.array(per_seed), 0.1) == pytest.approx(expected, abs=1e-12)
 
 
 # --- the decision interval, the verdict ---------------------------------------------------------------------------

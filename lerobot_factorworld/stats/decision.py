@@ -4,8 +4,12 @@ Why a hull: at few training seeds the bootstrap's percentile interval is too nar
 between seeds than the seeds it has), and the t-interval over seeds ignores episode noise within each; the wider of
 the two, both ways, is honest for both.
 
+The p-value that orders comparisons for a correction is, likewise, the larger of the bootstrap's and the t-test's.
+
 References: the percentile interval, Efron & Tibshirani (1993), "An Introduction to the Bootstrap", ch. 13; the
-t-interval and the seeds it needs, Student (1908), "The probable error of a mean", Biometrika 6(1).
+bootstrap p-value, Davison & Hinkley (1997), "Bootstrap Methods and their Application", section 4.4 (``(1 + #) /
+(B + 1)``, doubled for two sides); the t-interval, the t-test and the seeds they need, Student (1908), "The probable
+error of a mean", Biometrika 6(1).
 """
 
 from __future__ import annotations
@@ -33,6 +37,30 @@ def decision_interval(point: float, reps: np.ndarray, per_seed: np.ndarray, leve
     half = stats.t.ppf(1 - (1 - level) / 2, df=len(per_seed) - 1) * np.std(per_seed, ddof=1) / math.sqrt(len(per_seed))
     mean = float(np.mean(per_seed))
     return Estimate(point, min(float(lo), mean - half), max(float(hi), mean + half), level, HULL)
+
+
+def bootstrap_p_value(reps: np.ndarray, threshold: float) -> float:
+    """Two-sided bootstrap p-value of the replicates ``reps`` against ``threshold`` (Davison & Hinkley 1997, 4.4:
+    ``2 (1 + #(on the rarer side)) / (B + 1)``, capped at 1); 1 where fewer than half the replicates are defined
+    (the statistic is undefined too often)."""
+    x = reps[np.isfinite(reps)] - threshold
+    if x.size < len(reps) / 2:
+        return 1.0
+    return float(min(1.0, 2 * (min(np.sum(x <= 0), np.sum(x >= 0)) + 1) / (x.size + 1)))
+
+
+def decision_p_value(p_boot: float, per_seed: np.ndarray, threshold: float) -> float:
+    """Two-sided p-value against ``threshold``: the larger of the bootstrap's ``p_boot`` and Student's (1908) t-test
+    over the ``per_seed`` values (1 with one seed: the spread between seeds is unknown)."""
+    if len(per_seed) < 2:
+        return 1.0
+    sd = float(np.std(per_seed, ddof=1))
+    diff = float(np.mean(per_seed)) - threshold
+    if sd == 0:
+        p_t = 0.0 if diff != 0 else 1.0
+    else:
+        p_t = float(2 * stats.t.sf(abs(diff) / (sd / math.sqrt(len(per_seed))), df=len(per_seed) - 1))
+    return max(p_boot, p_t)
 
 
 def episodes_needed(resolvable: Callable[[float, float], float], effect: float, z: float) -> float:

@@ -30,11 +30,16 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
-from scipy import stats
 
 from ...protocol.conditions import PAIR_SEPARATOR, TRAIN_SUITE
 from ...stats.bootstrap import percentile_interval
-from ...stats.decision import decision_interval, episodes_needed, seeds_needed
+from ...stats.decision import (
+    bootstrap_p_value,
+    decision_interval,
+    decision_p_value,
+    episodes_needed,
+    seeds_needed,
+)
 from ...stats.estimate import Estimate
 from ...stats.multitest import HOLM, rank_levels, step_down
 from ...stats.power import difference_resolvable, mean_resolvable_gap, pair_metric_resolvable, slope_resolvable
@@ -389,8 +394,8 @@ class _Evidence:
 
 def _evidence(c: Comparison) -> _Evidence:
     point, reps, per_seed = _replicates(c.table, c.statistic)
-    p_boot = _p_bootstrap(c, reps)
-    return _Evidence(point, reps, per_seed, _p_value(c, p_boot, per_seed), p_boot)
+    p_boot = bootstrap_p_value(reps, c.threshold)
+    return _Evidence(point, reps, per_seed, decision_p_value(p_boot, per_seed, c.threshold), p_boot)
 
 
 def _replicates(table: Cells, statistic: Statistic) -> tuple[float, np.ndarray, np.ndarray]:
@@ -402,27 +407,6 @@ def _replicates(table: Cells, statistic: Statistic) -> tuple[float, np.ndarray, 
          for s in range(len(table.seeds))]
     )  # fmt: skip
     return float(point), np.asarray(reps, dtype=float), per_seed[np.isfinite(per_seed)]
-
-
-def _p_bootstrap(c: Comparison, reps: np.ndarray) -> float:
-    """Two-sided bootstrap p-value against the threshold (1 where the statistic is undefined too often)."""
-    x = reps[np.isfinite(reps)] - c.threshold
-    if x.size < len(reps) / 2:
-        return 1.0
-    return float(min(1.0, 2 * (min(np.sum(x <= 0), np.sum(x >= 0)) + 1) / (x.size + 1)))
-
-
-def _p_value(c: Comparison, p_boot: float, per_seed: np.ndarray) -> float:
-    """Two-sided p-value against the threshold: the larger of the bootstrap's and the t-test's (1 with one seed)."""
-    if len(per_seed) < 2:
-        return 1.0
-    sd = float(np.std(per_seed, ddof=1))
-    diff = float(np.mean(per_seed)) - c.threshold
-    if sd == 0:
-        p_t = 0.0 if diff != 0 else 1.0
-    else:
-        p_t = float(2 * stats.t.sf(abs(diff) / (sd / math.sqrt(len(per_seed))), df=len(per_seed) - 1))
-    return max(p_boot, p_t)
 
 
 def _verdict(c: Comparison, low: float, high: float, smallest: float, *, counts_known: bool) -> str:
