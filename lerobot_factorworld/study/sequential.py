@@ -3,8 +3,8 @@
 Why: a profile's factors differ in how many episodes they need (a gap of +0.44 is resolved in twenty paired
 episodes, a gap of +0.01 not in a thousand), and stopping on a fixed-n interval looked at after every block
 inflates false findings. Here every shifted condition carries an anytime-valid confidence sequence for its
-paired gap (``stats/confseq.py``: the betting construction of Waudby-Smith and Ramdas), corrected for the number of
-conditions by **Bonferroni**: with ``k`` shifted conditions each sequence is at level ``1 - alpha / k``, so with
+paired gap (``stats/confseq.py``: the betting construction of Waudby-Smith and Ramdas), corrected for the number
+of conditions by **Bonferroni**: with ``k`` shifted conditions each sequence is at level ``1 - alpha / k``, so with
 probability at least ``1 - alpha`` every condition's interval holds at every look, whatever the stopping.
 
 After each block (the same reset seeds in every condition) a still-running condition stops when its interval
@@ -28,6 +28,7 @@ from dataclasses import asdict, dataclass
 import numpy as np
 
 from ..stats.confseq import mean_cs
+from ..stats.multitest import BONFERRONI, rank_levels
 from ..stats.stopping import REASONS, Stops, apply_rule
 
 AUTO = "auto"  # eval.episodes' value that asks for this rule
@@ -67,12 +68,12 @@ class StopRule:
         return 1.0 - self.confidence
 
     def gap_alpha(self, k: int) -> float:
-        """Each of ``k`` gap sequences' error (Bonferroni)."""
-        return self.alpha / max(1, k)
+        """Each of ``k`` gap sequences' error (Bonferroni: ``alpha / k``)."""
+        return rank_levels(max(1, k), self.alpha, BONFERRONI)[0]
 
     def success_alpha(self, k: int) -> float:
         """Each success-rate sequence's error, over ``train`` and ``k`` shifted conditions (Bonferroni)."""
-        return self.alpha / (k + 1)
+        return rank_levels(k + 1, self.alpha, BONFERRONI)[0]
 
     def to_dict(self) -> dict:
         return {**asdict(self), "construction": CONSTRUCTION}

@@ -19,8 +19,12 @@ by the success rates: a gap by P_T, a difference of gaps by the easier factor's 
 itself) is below the smallest effect the design resolves, else **not resolved**. A claim of several
 comparisons (an ordering, a band) disagrees if one does, agrees if all do, is capped if every comparison left
 is, and is not resolved otherwise. "Not resolved" comes with the smallest effect this design resolves
-(``power.py``: episode noise only, a lower bound) and what would resolve the observed effect: the episodes per
-cell at these seeds (episode noise), and the seeds at the observed spread between seeds.
+(``stats/power.py``: episode noise only, a lower bound) and what would resolve the observed effect: the episodes
+per cell at these seeds (episode noise), and the seeds at the observed spread between seeds.
+
+The numbers themselves (the decision interval and p-values, Holm's levels and step-down, the power and the sample
+sizes) are the statistics library's (``stats/decision.py``, ``multitest.py``, ``power.py``); this module says what
+they are computed on and turns them into verdicts.
 """
 
 from __future__ import annotations
@@ -74,7 +78,7 @@ class Comparison:
     threshold: float
     sign: int
     headroom: float  # the most the statistic can move from the threshold the paper's way (NaN: unbounded)
-    resolvable: Callable[[float, float], float]  # (episodes per cell, z) -> smallest |effect| resolved (power.py)
+    resolvable: Callable[[float, float], float]  # (episodes per cell, z) -> smallest |effect| resolved (stats/power.py)
     contrary: float = math.nan  # the most it can move from the threshold the other way (NaN: unbounded)
     success: SuccessChange | None = None  # for a gap that shrinks: the treatment's P_T and P_F minus the baseline's
 
