@@ -7,7 +7,7 @@ the two, both ways, is honest for both.
 The p-value that orders comparisons for a correction is, likewise, the larger of the bootstrap's and the t-test's.
 
 References: the percentile interval, Efron & Tibshirani (1993), "An Introduction to the Bootstrap", ch. 13; the
-bootstrap p-value, Davison & Hinkley (1997), "Bootstrap Methods and their Application", section 4.4 (``(1 + #) /
+bootstrap p-value, Davison & Hinkley (1997), "Bootstrap Methods and their Application", ch. 4 (``(1 + #) /
 (B + 1)``, doubled for two sides); the t-interval, the t-test and the seeds they need, Student (1908), "The probable
 error of a mean", Biometrika 6(1).
 """
@@ -40,7 +40,7 @@ def decision_interval(point: float, reps: np.ndarray, per_seed: np.ndarray, leve
 
 
 def bootstrap_p_value(reps: np.ndarray, threshold: float) -> float:
-    """Two-sided bootstrap p-value of the replicates ``reps`` against ``threshold`` (Davison & Hinkley 1997, 4.4:
+    """Two-sided bootstrap p-value of the replicates ``reps`` against ``threshold`` (Davison & Hinkley 1997, ch. 4:
     ``2 (1 + #(on the rarer side)) / (B + 1)``, capped at 1); 1 where fewer than half the replicates are defined
     (the statistic is undefined too often)."""
     x = reps[np.isfinite(reps)] - threshold

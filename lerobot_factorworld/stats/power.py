@@ -7,7 +7,7 @@ needs.
 
 References: Newcombe (1998a), "Improved confidence intervals for the difference between binomial proportions based
 on paired data", Statistics in Medicine 17(22) (method 10, for one cell); the normal approximation for a difference
-of proportions, Fleiss, Levin, Paik (2003), "Statistical Methods for Rates and Proportions", 3rd ed., section 4.2;
+of proportions, Fleiss, Levin, Paik (2003), "Statistical Methods for Rates and Proportions", 3rd ed., ch. 4;
 the variance of a least-squares slope, Rice (2007), "Mathematical Statistics and Data Analysis", 3rd ed., 14.2.
 """
 
@@ -44,7 +44,7 @@ def cell_resolvable_gap(episodes: int, p_train: float, paired: bool = True, z: f
 
 def mean_resolvable_gap(pairs: int, p_train: float, z: float = Z95) -> float:
     """Smallest mean gap over ``pairs`` episode pairs (all cells together) whose normal-approximation 95%
-    interval (Fleiss et al. 2003, 4.2) excludes 0, outcomes independent given the rates (at P_T = 0.5 the closed
+    interval (Fleiss et al. 2003, ch. 4) excludes 0, outcomes independent given the rates (at P_T = 0.5 the closed
     form is sqrt(z^2 / 2 / (pairs + z^2)), up to the search's resolution). NaN at P_T = 0, where no gap can open,
     as ``cell_resolvable_gap`` gives."""
     if p_train <= 0:
@@ -59,7 +59,7 @@ def mean_resolvable_gap(pairs: int, p_train: float, z: float = Z95) -> float:
 
 def difference_resolvable(pairs: int, p: float, z: float = Z95) -> float:
     """Smallest difference between two success rates near ``p``, each over ``pairs`` episodes (independent
-    outcomes), that a 95% normal interval tells from 0 (Fleiss et al. 2003, 4.2)."""
+    outcomes), that a 95% normal interval tells from 0 (Fleiss et al. 2003, ch. 4)."""
     return z * math.sqrt(2 * p * (1 - p) / pairs)
 
 

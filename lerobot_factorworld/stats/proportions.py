@@ -21,7 +21,8 @@ Z95 = 1.959963984540054  # two-sided 95% normal quantile
 
 
 def two_sided_z(confidence: float) -> float:
-    """The normal quantile of a two-sided interval at ``confidence`` (1.96 at 0.95): ``Phi^-1(1 - alpha / 2)``."""
+    """The normal quantile of a two-sided interval at ``confidence`` (1.96 at 0.95): ``Phi^-1(1 - alpha / 2)``, the
+    standard normal's inverse (Abramowitz & Stegun (1964), "Handbook of Mathematical Functions", 26.2)."""
     if not 0 < confidence < 1:
         raise ValueError(f"confidence must be in (0, 1), got {confidence}")
     from scipy import stats  # noqa: PLC0415 - scipy.stats takes a second to import; most users of this module never need it

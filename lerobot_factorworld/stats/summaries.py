@@ -6,7 +6,9 @@ each function here maps a batch of tables to a batch of values, NaN where a valu
 
 References: the pair metric is Xie, Lee, Xiao, Finn (2023), "Decomposing the Generalization Gap in Imitation
 Learning for Visual Robotic Manipulation", section 5.2; the standard error of a mean and the least-squares slope are
-textbook (e.g. Rice (2007), "Mathematical Statistics and Data Analysis", 3rd ed., sections 7.3 and 14.2).
+textbook (e.g. Rice (2007), "Mathematical Statistics and Data Analysis", 3rd ed., sections 7.3 and 14.2); a mean
+over seeds of means over cells is a two-stage (cluster) mean, each seed a cluster (Cochran (1977), "Sampling
+Techniques", 3rd ed.).
 """
 
 from __future__ import annotations
@@ -46,7 +48,8 @@ def mean_se(values: Sequence[float]) -> tuple[float, float]:
 
 
 def nanmean(x: np.ndarray, axis: int, weights: np.ndarray | None = None) -> np.ndarray:
-    """Mean over ``axis`` of the defined (non-NaN) values, optionally weighted; NaN where none is defined."""
+    """Mean over ``axis`` of the defined (non-NaN) values, optionally weighted (the weighted arithmetic mean, Rice
+    2007, 7.3); NaN where none is defined."""
     x = np.asarray(x, dtype=float)
     defined = ~np.isnan(x)
     w = defined.astype(float) if weights is None else np.where(defined, weights, 0.0)
@@ -57,14 +60,16 @@ def nanmean(x: np.ndarray, axis: int, weights: np.ndarray | None = None) -> np.n
 
 def group_mean(values: np.ndarray, groups: Sequence[Sequence[int]]) -> np.ndarray:
     """(..., S, C) per-seed cell values -> (..., G): per group of columns, the mean over its columns per seed
-    (tasks, N), then the mean over seeds, each over defined values only (``aggregate.summary``'s rule)."""
+    (tasks, N), then the mean over seeds, each over defined values only (``aggregate.summary``'s rule: a two-stage
+    mean, each seed a cluster, Cochran 1977)."""
     per_seed = np.stack([nanmean(values[..., list(cols)], axis=-1) for cols in groups], axis=-1)  # (..., S, G)
     return nanmean(per_seed, axis=-2)
 
 
 def pooled_rates(rates: np.ndarray, episodes: np.ndarray) -> np.ndarray:
-    """(..., S, C) -> (..., C): success pooled over seeds (successes / episodes; equal weights where the
-    episode counts are unknown)."""
+    """(..., S, C) -> (..., C): success pooled over seeds (successes / episodes, the pooled proportion of Fleiss,
+    Levin, Paik (2003), "Statistical Methods for Rates and Proportions"; equal weights where the episode counts are
+    unknown)."""
     weights = np.where(episodes > 0, episodes, 1.0)
     return nanmean(rates, axis=-2, weights=weights)
 
@@ -77,7 +82,8 @@ def pair_metric_array(p_ab: np.ndarray, p_a: np.ndarray, p_b: np.ndarray) -> np.
 
 
 def count_within(values: np.ndarray, tolerance: float) -> np.ndarray:
-    """(..., P) -> (...): how many of the defined values lie within ``±tolerance``."""
+    """(..., P) -> (...): how many of the defined values lie within ``±tolerance`` (the band Xie et al. 2023 read the
+    pair metric against)."""
     return (np.abs(np.nan_to_num(values, nan=np.inf)) <= tolerance).sum(axis=-1)
 
 
