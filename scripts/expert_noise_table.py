@@ -24,7 +24,7 @@ add_repo_to_path()
 from lerobot_factorworld.envs.factor_env import FactorWorldEnv  # noqa: E402
 from lerobot_factorworld.experts import expert_policy, rollout  # noqa: E402
 from lerobot_factorworld.protocol.sampling import SamplingOptions, sample_configs  # noqa: E402
-from lerobot_factorworld.study.metrics import wilson_interval  # noqa: E402
+from lerobot_factorworld.stats.proportions import wilson_interval  # noqa: E402
 
 
 def cell(task: str, n_envs: int, noise: float, episodes: int, options: SamplingOptions) -> tuple[int, float]:

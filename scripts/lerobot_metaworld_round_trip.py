@@ -46,7 +46,7 @@ from lerobot.envs.metaworld import TASK_POLICY_MAPPING, MetaworldEnv  # noqa: E4
 from lerobot.utils.constants import ACTION, OBS_IMAGE, OBS_STATE  # noqa: E402
 
 from lerobot_factorworld.adapters.env_config import FactorWorldEnvConfig  # noqa: E402
-from lerobot_factorworld.study.metrics import wilson_interval  # noqa: E402
+from lerobot_factorworld.stats.proportions import wilson_interval  # noqa: E402
 
 BIN = Path(sys.executable).parent
 DEFAULT_POLICY_ARGS = (

@@ -72,7 +72,7 @@ def main() -> None:
 
 
 def _wilson(k: int, n: int) -> tuple[float, float]:
-    from lerobot_factorworld.study.metrics import wilson_interval
+    from lerobot_factorworld.stats.proportions import wilson_interval
 
     return wilson_interval(k, n)
 

@@ -1,4 +1,5 @@
-"""Replay ``eval.episodes=auto``'s stopping rule (lerobot_factorworld/study/sequential.py) on committed episodes.
+"""Replay ``eval.episodes=auto``'s stopping rule (lerobot_factorworld/stats/stopping.py, its settings in
+study/sequential.py) on committed episodes.
 
 For every cell (method, task, N, seed, widths) of each study's ``docs/results/<study>/episodes.parquet`` that has a
 ``train`` condition and shifted ones on the same episode seeds, the rule runs over the episodes in seed order, in
@@ -23,7 +24,7 @@ from typing import NamedTuple
 
 import pyarrow.parquet as pq
 
-from lerobot_factorworld.study.metrics import paired_gap
+from lerobot_factorworld.stats.proportions import paired_gap
 from lerobot_factorworld.study.sequential import StopRule, decide
 
 RESULTS = Path(__file__).resolve().parents[1] / "docs" / "results"

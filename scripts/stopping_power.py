@@ -1,5 +1,5 @@
-"""When ``eval.episodes=auto`` saves episodes: its stopping rule (lerobot_factorworld/study/sequential.py) on
-simulated profiles of one checkpoint, against a fixed number of episodes per condition equal to its budget, and
+"""When ``eval.episodes=auto`` saves episodes: its stopping rule (lerobot_factorworld/stats/stopping.py, its
+settings in study/sequential.py) on simulated profiles of one checkpoint, against a fixed number of episodes per condition equal to its budget, and
 what no valid test can do with fewer episodes.
 
 Four parts:
@@ -42,9 +42,10 @@ import numpy as np
 from replay_stopping import cells as committed_cells  # the replay's reading of committed episodes (scripts/)
 from tqdm import tqdm
 
-from lerobot_factorworld.study.confseq import candidate_grid
-from lerobot_factorworld.study.metrics import paired_gap
-from lerobot_factorworld.study.sequential import DECIDED, StopRule, apply_rule
+from lerobot_factorworld.stats.confseq import candidate_grid
+from lerobot_factorworld.stats.proportions import paired_gap
+from lerobot_factorworld.stats.stopping import DECIDED
+from lerobot_factorworld.study.sequential import StopRule
 
 F1_FACTORS = ("table_pos", "table_texture", "camera_pos", "object_texture", "floor_texture", "light", "distractors")
 F1_GAPS = (0.437, 0.423, 0.117, 0.090, 0.077, 0.053, 0.023)  # bc's mean gaps over F1's 15 cells
@@ -67,7 +68,7 @@ def rule_floor(rule: StopRule, k: int, points: int = SIM_POINTS) -> int:
     """The first look of ``rule`` (blocks of 1) at which paired differences that are all +1 decide a gap."""
     one = StopRule(1, rule.max_episodes, rule.tolerance, rule.confidence)
     train, shifted = np.ones((1, rule.max_episodes)), np.zeros((1, k, rule.max_episodes))
-    stops = apply_rule(train, shifted, one, grid=candidate_grid(points))
+    stops = one.apply(train, shifted, grid=candidate_grid(points))
     return int(stops.episodes[0, 0]) if stops.reason[0, 0] == DECIDED else -1
 
 
@@ -162,7 +163,7 @@ def profiles(p_train: float, gaps: np.ndarray, n: int, episodes: int, copula: fl
 def compare(budget: int, args, gaps: np.ndarray, rng) -> list[str]:
     rule = StopRule(args.block, budget, args.tolerance, args.confidence)
     train, shifted = profiles(args.p_train, gaps, args.profiles, budget, args.copula, rng)
-    stops = apply_rule(train, shifted, rule, grid=candidate_grid(args.grid_points))
+    stops = rule.apply(train, shifted, grid=candidate_grid(args.grid_points))
     used = stops.episodes.max(axis=1) + stops.episodes.sum(axis=1)  # train runs as long as its longest condition
     share = used.mean() / ((len(gaps) + 1) * budget)
     fixed = np.zeros(stops.episodes.shape, dtype=bool)

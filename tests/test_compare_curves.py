@@ -8,7 +8,7 @@ from pathlib import Path
 
 import pytest
 
-from lerobot_factorworld.study.metrics import newcombe_independent, paired_gap, two_sided_z
+from lerobot_factorworld.stats.proportions import newcombe_independent, paired_gap, two_sided_z
 from lerobot_factorworld.study.results.compare_curves import CurveSide, curve_comparison_lines
 from lerobot_factorworld.study.results.curve import CURVE_FILE, read_curve, write_curve
 

@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from lerobot_factorworld.study.metrics import wilson_interval
+from lerobot_factorworld.stats.proportions import wilson_interval
 from lerobot_factorworld.study.plan.config import MethodConfig, StudyConfig
 from lerobot_factorworld.study.report.claims_markdown import claim_rows
 from lerobot_factorworld.study.report.episode_videos import MANIFEST

@@ -8,9 +8,9 @@ import random
 import numpy as np
 import pytest
 
-from lerobot_factorworld.study import metrics
+from lerobot_factorworld.stats import bootstrap, power, proportions, ranks, summaries
 from lerobot_factorworld.study.paper import PAPER_FACTOR_RANKS
-from lerobot_factorworld.study.plan import power
+from lerobot_factorworld.study.plan import power as plan_power
 from lerobot_factorworld.study.plan.config import EvalSettings, StudyConfig
 from lerobot_factorworld.study.plan.grid import DEFAULT_WIDTHS
 from lerobot_factorworld.study.report.markdown import (
@@ -45,7 +45,7 @@ def study_rows(method="bc", seeds=(0, 1, 2), tasks=("door-open", "pick-place"), 
                         drop = sum(HARDNESS[f] for f in factors) * radius / 0.025
                         outcomes = [t and rnd.random() >= drop for t in train]
                         k = sum(outcomes)
-                        gap = 0.0 if c == "train" else metrics.paired_gap(train, outcomes)[0]
+                        gap = 0.0 if c == "train" else proportions.paired_gap(train, outcomes)[0]
                         rows.append(
                             {
                                 "method": method,
@@ -86,48 +86,48 @@ def test_bootstrap_is_deterministic_and_seeded():
     episodes = np.array([[20, 20, 0], [20, 20, 20]])
 
     def statistic(r, n):
-        return metrics.nanmean(r, axis=-2)  # mean over seeds per cell
+        return summaries.nanmean(r, axis=-2)  # mean over seeds per cell
 
-    point, a = metrics.seed_bootstrap(rates, episodes, statistic)
-    _, b = metrics.seed_bootstrap(rates, episodes, statistic)
-    assert a.shape == (metrics.BOOTSTRAP_RESAMPLES, 3) and np.array_equal(a, b, equal_nan=True)
+    point, a = bootstrap.seed_bootstrap(rates, episodes, statistic)
+    _, b = bootstrap.seed_bootstrap(rates, episodes, statistic)
+    assert a.shape == (bootstrap.BOOTSTRAP_RESAMPLES, 3) and np.array_equal(a, b, equal_nan=True)
     assert np.allclose(point, [0.6, 0.15, 0.3])
-    _, other = metrics.seed_bootstrap(rates, episodes, statistic, seed=1)
+    _, other = bootstrap.seed_bootstrap(rates, episodes, statistic, seed=1)
     assert not np.array_equal(a, other, equal_nan=True)
-    assert metrics.BOOTSTRAP_RESAMPLES == 2000 and metrics.BOOTSTRAP_SEED == 0
+    assert bootstrap.BOOTSTRAP_RESAMPLES == 2000 and bootstrap.BOOTSTRAP_SEED == 0
 
 
 def test_known_small_cases():
-    mean = lambda r, n: metrics.nanmean(r, axis=-2)  # noqa: E731
+    mean = lambda r, n: summaries.nanmean(r, axis=-2)  # noqa: E731
     # one seed, unknown episode counts: nothing to resample, the interval is the point
-    point, reps = metrics.seed_bootstrap(np.array([[0.4]]), np.array([[0]]), mean)
-    assert np.all(reps == 0.4) and metrics.percentile_interval(reps) == (0.4, 0.4)
+    point, reps = bootstrap.seed_bootstrap(np.array([[0.4]]), np.array([[0]]), mean)
+    assert np.all(reps == 0.4) and bootstrap.percentile_interval(reps) == (0.4, 0.4)
     # two seeds, counts unknown: replicates are 0.2 (1/4), 0.5 (1/2), 0.8 (1/4): interval [0.2, 0.8]
-    _, reps = metrics.seed_bootstrap(np.array([[0.2], [0.8]]), np.array([[0], [0]]), mean)
+    _, reps = bootstrap.seed_bootstrap(np.array([[0.2], [0.8]]), np.array([[0], [0]]), mean)
     assert set(np.round(reps.ravel(), 9)) == {0.2, 0.5, 0.8}
     assert abs((reps == 0.2).mean() - 0.25) < 0.03
-    assert np.allclose(metrics.percentile_interval(reps), ([0.2], [0.8]))
+    assert np.allclose(bootstrap.percentile_interval(reps), ([0.2], [0.8]))
     # one seed, one cell of 400 episodes at 0.5: the episode resample is binomial, sd sqrt(0.25 / 400); the
     # interval is the replicates' 2.5th and 97.5th percentiles (about 0.5 -+ 1.96 * 0.025; 90% would be -+ 0.041)
-    _, reps = metrics.seed_bootstrap(np.array([[0.5]]), np.array([[400]]), mean)
+    _, reps = bootstrap.seed_bootstrap(np.array([[0.5]]), np.array([[400]]), mean)
     assert reps.std() == pytest.approx(0.025, rel=0.1)
-    low, high = metrics.percentile_interval(reps)
+    low, high = bootstrap.percentile_interval(reps)
     assert (low[0], high[0]) == (np.quantile(reps, 0.025), np.quantile(reps, 0.975))
     assert low[0] == pytest.approx(0.451, abs=0.005) and high[0] == pytest.approx(0.549, abs=0.005)
     # a statistic undefined in most replicates has no interval
-    assert all(math.isnan(v) for v in metrics.percentile_interval(np.array([np.nan, np.nan, 1.0])))
+    assert all(math.isnan(v) for v in bootstrap.percentile_interval(np.array([np.nan, np.nan, 1.0])))
 
 
 def test_the_percentile_interval_is_the_95_percent_one():
     """0 .. 1 in 1001 even steps: the 2.5th and 97.5th percentiles are 0.025 and 0.975 exactly (a 90% interval
     would be 0.05 .. 0.95); NaN replicates are left out, not counted as values."""
     replicates = np.arange(1001) / 1000
-    assert metrics.percentile_interval(replicates) == pytest.approx((0.025, 0.975), abs=1e-12)
-    assert metrics.percentile_interval(replicates, level=0.9) == pytest.approx((0.05, 0.95), abs=1e-12)
+    assert bootstrap.percentile_interval(replicates) == pytest.approx((0.025, 0.975), abs=1e-12)
+    assert bootstrap.percentile_interval(replicates, level=0.9) == pytest.approx((0.05, 0.95), abs=1e-12)
     with_nan = np.concatenate([replicates, [np.nan] * 10])
-    assert metrics.percentile_interval(with_nan) == pytest.approx((0.025, 0.975), abs=1e-12)
+    assert bootstrap.percentile_interval(with_nan) == pytest.approx((0.025, 0.975), abs=1e-12)
     columns = np.stack([replicates, 2 * replicates], axis=1)  # per column
-    low, high = metrics.percentile_interval(columns)
+    low, high = bootstrap.percentile_interval(columns)
     assert low == pytest.approx([0.025, 0.05], abs=1e-12) and high == pytest.approx([0.975, 1.95], abs=1e-12)
 
 
@@ -156,13 +156,13 @@ def test_a_factors_gap_interval_is_the_95_percent_interval_of_the_seed_bootstrap
     ((point, low, high),) = aggregate.factor_gap_intervals(rows, "bc", ["light"]).values()
 
     rates = np.array([[train / 20, light / 20] for train, light in successes.values()])  # (seeds, [train, light])
-    b = metrics.BOOTSTRAP_RESAMPLES
-    seeds = np.random.default_rng([metrics.BOOTSTRAP_SEED, metrics.identity_seed((0, 1, 2))]).integers(0, 3, (b, 3))
+    b = bootstrap.BOOTSTRAP_RESAMPLES
+    seeds = np.random.default_rng([bootstrap.BOOTSTRAP_SEED, bootstrap.identity_seed((0, 1, 2))]).integers(0, 3, (b, 3))
     drawn = rates[seeds]  # (resamples, seeds drawn, cells)
     resampled = np.stack(
         [
             np.random.default_rng(
-                [metrics.BOOTSTRAP_SEED, metrics.identity_seed(("bc", "door-open", 5, DEFAULT_WIDTHS, c))]
+                [bootstrap.BOOTSTRAP_SEED, bootstrap.identity_seed(("bc", "door-open", 5, DEFAULT_WIDTHS, c))]
             ).binomial(np.full(drawn.shape[:2], 20), drawn[..., i])
             / 20
             for i, c in enumerate(("train", "light"))
@@ -177,17 +177,17 @@ def test_a_factors_gap_interval_is_the_95_percent_interval_of_the_seed_bootstrap
 
 
 def test_vectorised_pieces_match_the_scalar_ones():
-    assert metrics.ols_slope([0.025, 0.05, 0.075], np.array([0.1, 0.2, 0.3])) == pytest.approx(4.0)
-    assert metrics.ols_slope([0.025, 0.05, 0.075], np.array([0.1, np.nan, 0.3])) == pytest.approx(4.0)
-    assert math.isnan(metrics.ols_slope([0.025, 0.05], np.array([0.1, np.nan])))
-    assert metrics.pair_metric_array(np.array(0.4), np.array(0.5), np.array(0.8)) == pytest.approx(-0.2)
-    assert math.isnan(metrics.pair_metric_array(np.array(0.1), np.array(0.0), np.array(0.5)))
-    assert metrics.count_within(np.array([0.05, -0.06, 0.07, np.nan]), 0.06) == 2
+    assert summaries.ols_slope([0.025, 0.05, 0.075], np.array([0.1, 0.2, 0.3])) == pytest.approx(4.0)
+    assert summaries.ols_slope([0.025, 0.05, 0.075], np.array([0.1, np.nan, 0.3])) == pytest.approx(4.0)
+    assert math.isnan(summaries.ols_slope([0.025, 0.05], np.array([0.1, np.nan])))
+    assert summaries.pair_metric_array(np.array(0.4), np.array(0.5), np.array(0.8)) == pytest.approx(-0.2)
+    assert math.isnan(summaries.pair_metric_array(np.array(0.1), np.array(0.0), np.array(0.5)))
+    assert summaries.count_within(np.array([0.05, -0.06, 0.07, np.nan]), 0.06) == 2
     # per seed over columns, then over seeds, each over defined values: (0.2 + 0.4) / 2 and 0.6 -> 0.45
     values = np.array([[0.2, 0.4], [0.6, np.nan]])
-    assert metrics.group_mean(values, [[0, 1]])[0] == pytest.approx(0.45)
+    assert summaries.group_mean(values, [[0, 1]])[0] == pytest.approx(0.45)
     # pooled over seeds, weighted by episodes: (0.5 * 10 + 0.2 * 30) / 40
-    assert metrics.pooled_rates(np.array([[0.5], [0.2]]), np.array([[10], [30]]))[0] == pytest.approx(0.275)
+    assert summaries.pooled_rates(np.array([[0.5], [0.2]]), np.array([[10], [30]]))[0] == pytest.approx(0.275)
 
 
 # --- the summaries: the report's numbers, with intervals -------------------------------------------
@@ -224,7 +224,7 @@ def test_intervals_cover_the_point_estimates_which_match_the_tables():
     radius = aggregate.gap_per_radius(rows, ["camera_pos"])
     means = [radius[("bc", "camera_pos", r)][0] for r in (0.025, 0.05, 0.075)]
     point, low, high = slopes[("bc", "camera_pos")]
-    assert point == pytest.approx(metrics.ols_slope([0.025, 0.05, 0.075], np.array(means)))
+    assert point == pytest.approx(summaries.ols_slope([0.025, 0.05, 0.075], np.array(means)))
     assert low <= point <= high and low > 0  # camera gaps grow with the radius here
 
     pooled = aggregate.pooled_success(aggregate.main_grid(rows), ["method", "task", "n_train_envs", "condition"])
@@ -235,7 +235,7 @@ def test_intervals_cover_the_point_estimates_which_match_the_tables():
             if (r["task"], r["n_train_envs"], r["condition"], r["widths"]) == (task, n, condition, DEFAULT_WIDTHS)
         ]
         assert (k, total) == (sum(r["successes"] for r in cell), sum(r["episodes"] for r in cell))
-        wilson = metrics.wilson_interval(k, total)
+        wilson = proportions.wilson_interval(k, total)
         assert low <= wilson[0] and high >= wilson[1] and low <= k / total <= high
 
 
@@ -271,7 +271,7 @@ def test_pooled_rho_interval_covers_the_pooled_rates_rho():
     rows = [r for r in study_rows() if r["widths"] == DEFAULT_WIDTHS and r["condition"] in FACTORS]
     truth = {f: 1.0 - HARDNESS[f] for f in FACTORS}  # a success-rate-like reference: easier = higher
     pooled = aggregate.pooled_success(rows, ["condition"])
-    point = metrics.spearman({c: k / n for (c,), (k, n, _, _) in pooled.items()}, truth)
+    point = ranks.spearman({c: k / n for (c,), (k, n, _, _) in pooled.items()}, truth)
     low, high = aggregate.pooled_rho_interval(rows, "condition", truth)
     assert point > 0.9 and 0.5 < low <= high <= 1.0
     assert all(math.isnan(v) for v in aggregate.pooled_rho_interval(rows, "condition", {"light": 1.0, "x": 0.5}))
@@ -281,7 +281,7 @@ def test_one_seed_pooled_success_is_the_wilson_interval():
     rows = [r for r in study_rows(seeds=(0,)) if r["widths"] == DEFAULT_WIDTHS and r["condition"] == "train"]
     pooled = aggregate.pooled_success(rows, ["method", "task", "n_train_envs", "condition"])
     for k, n, low, high in pooled.values():
-        assert (low, high) == pytest.approx(metrics.wilson_interval(k, n))
+        assert (low, high) == pytest.approx(proportions.wilson_interval(k, n))
 
 
 def test_gap_against_n_matches_the_gap_table_and_resolves_a_gap_that_closes():
@@ -349,7 +349,7 @@ def test_the_report_prints_intervals_for_rho_pairs_slopes_and_pooled_tables():
 
 
 def test_power_numbers_for_textbook_cases():
-    z = metrics.Z95
+    z = proportions.Z95
     # two proportions of 100 each at 0.5: 1.96 * sqrt(2 * 0.25 / 100) = 0.139 (the two-sample z-test)
     assert power.difference_resolvable(100, 0.5) == pytest.approx(z * math.sqrt(0.005))
     assert power.difference_resolvable(100, 0.5) == pytest.approx(0.1386, abs=1e-4)
@@ -364,8 +364,8 @@ def test_a_cells_resolvable_gap_is_where_newcombes_interval_starts_to_exclude_0(
     # 20 paired episodes at P_T = 0.8, no reversals: 5 train-only successes (gap 0.25) are resolved, 4 are not
     assert power.cell_resolvable_gap(20, 0.8) == 0.25
     train = [True] * 16 + [False] * 4
-    assert metrics.paired_gap(train, [True] * 11 + [False] * 9)[1] > 0
-    assert metrics.paired_gap(train, [True] * 12 + [False] * 8)[1] <= 0
+    assert proportions.paired_gap(train, [True] * 11 + [False] * 9)[1] > 0
+    assert proportions.paired_gap(train, [True] * 12 + [False] * 8)[1] <= 0
     independent = power.cell_resolvable_gap(20, 0.8, paired=False)
     assert 0.25 < independent < 0.35  # independent outcomes need more
     assert power.cell_resolvable_gap(100, 0.8) < power.cell_resolvable_gap(20, 0.8)
@@ -373,11 +373,11 @@ def test_a_cells_resolvable_gap_is_where_newcombes_interval_starts_to_exclude_0(
 
 
 def test_dry_run_power_lines():
-    lines = power.power_lines(config())
+    lines = plan_power.power_lines(config())
     text = "\n".join(lines)
     assert "20 paired episodes per cell, 3 seed(s)" in text and "P=0.5" in text and "P=0.95" in text
     cell = next(line for line in lines if "one cell (Newcombe; no reversals)" in line)
     assert cell.split()[-3:] == ["0.250", "0.250", "0.250"]
     assert "factor's mean gap, 12 cell(s)" in text and "pair metric" in text and "radius slope" in text
-    no_pairs = "\n".join(power.power_lines(config(pairs=[], radius_factors=[])))
+    no_pairs = "\n".join(plan_power.power_lines(config(pairs=[], radius_factors=[])))
     assert "pair metric" not in no_pairs and "radius slope" not in no_pairs

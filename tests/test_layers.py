@@ -49,7 +49,7 @@ def test_every_contract_is_checked_and_kept():
     kept = re.search(r"Contracts: (\d+) kept, (\d+) broken\.", _text(out))
     assert kept, out.stdout[-3000:]
     assert int(kept.group(1)) == len(_contracts()) > 0 and kept.group(2) == "0"
-    assert {c["type"] for c in _contracts()} == {"layers", "independence"}
+    assert {c["type"] for c in _contracts()} == {"layers", "independence", "forbidden"}
 
 
 def _documented_layers() -> list[set[str]]:
@@ -88,10 +88,30 @@ def test_one_policy_importing_the_other_breaks_the_independence_contract(tmp_pat
 def test_an_upward_import_breaks_the_layer_contract(tmp_path):
     root = _copy(tmp_path)
     low = root / "lerobot_factorworld" / "core" / "splits.py"
-    low.write_text(low.read_text() + "\nfrom ..study import metrics  # an arrow from the bottom layer to the study\n")
+    low.write_text(low.read_text() + "\nfrom ..study import paper  # an arrow from the bottom layer to the study\n")
     out = _lint_imports(root)
     assert out.returncode != 0
     assert "lerobot_factorworld.core is not allowed to import lerobot_factorworld.study" in out.stdout
+
+
+def test_the_statistics_library_imports_nothing_of_the_package(tmp_path):
+    """``stats`` names every other top-level module of the package as forbidden to it (so a module added later and
+    left out of the layers is caught too), and an import of even the lowest layer breaks that contract."""
+    (forbidden,) = [c for c in _contracts() if c["type"] == "forbidden"]
+    assert forbidden["source_modules"] == [f"{PACKAGE}.stats"]
+    package = REPO / PACKAGE
+    found = {p.stem for p in package.glob("*.py") if p.name != "__init__.py"}
+    found |= {p.name for p in package.iterdir() if (p / "__init__.py").is_file()}
+    assert sorted(forbidden["forbidden_modules"]) == sorted(f"{PACKAGE}.{m}" for m in found - {"stats"})
+    root = _copy(tmp_path)
+    module = root / PACKAGE / "stats" / "ranks.py"
+    module.write_text(module.read_text() + "\nfrom ..core import rng  # the library reaching into the package\n")
+    out = _lint_imports(root)
+    assert out.returncode != 0
+    text = _text(out)
+    assert f"{forbidden['name']} BROKEN" in text
+    assert f"{PACKAGE}.stats is not allowed to import {PACKAGE}.core" in text
+    assert f"{PACKAGE}.stats.ranks -> {PACKAGE}.core.rng" in text
 
 
 def test_a_family_package_imported_below_its_layer_breaks_the_contract(tmp_path):

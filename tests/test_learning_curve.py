@@ -14,7 +14,7 @@ from toy_study import write_toy_study
 
 from lerobot_factorworld.core.settings import parse_config
 from lerobot_factorworld.envs.stages import stage_names
-from lerobot_factorworld.study.metrics import newcombe_independent, paired_gap
+from lerobot_factorworld.stats.proportions import newcombe_independent, paired_gap
 from lerobot_factorworld.study.plan.command import StudyCommand
 from lerobot_factorworld.study.plan.config import TrainSettings
 from lerobot_factorworld.study.plan.grid import CURVE_EPOCHS, make_plan

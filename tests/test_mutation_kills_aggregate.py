@@ -14,7 +14,7 @@ import warnings
 import numpy as np
 import pytest
 
-from lerobot_factorworld.study.metrics import Z95, wilson_interval
+from lerobot_factorworld.stats.proportions import Z95, wilson_interval
 from lerobot_factorworld.study.results import aggregate
 
 WIDE = "camera_pos=wide"

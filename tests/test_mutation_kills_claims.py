@@ -19,8 +19,7 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from lerobot_factorworld.study import metrics
-from lerobot_factorworld.study.plan import power
+from lerobot_factorworld.stats import bootstrap, decision, power
 from lerobot_factorworld.study.plan.claim_config import ClaimConfig
 from lerobot_factorworld.study.plan.config import MethodConfig, StudyConfig
 from lerobot_factorworld.study.results import claims
@@ -80,7 +79,7 @@ def z_at(level: float) -> float:
 
 def episodes_needed(resolvable, effect: float, z: float) -> float:
     e = 1
-    while e <= claims.MAX_EPISODES:
+    while e <= decision.MAX_EPISODES:
         if resolvable(e, z) <= effect:
             return float(e)
         e = max(e + 1, math.ceil(e * 1.1))
@@ -110,7 +109,7 @@ def check(
     assert (d.label, d.threshold, d.sign, d.seeds, d.level) == (label, threshold, sign, s, pytest.approx(level))
     assert d.point == pytest.approx(point, abs=1e-12) and float(own_point) == pytest.approx(point, abs=1e-12)
     assert d.headroom == pytest.approx(headroom, abs=1e-12)
-    low, high = (float(v) for v in metrics.percentile_interval(reps, level=level))
+    low, high = (float(v) for v in bootstrap.percentile_interval(reps, level=level))
     half = stats.t.ppf(1 - (1 - level) / 2, df=s - 1) * sd / math.sqrt(s)
     assert d.bootstrap == pytest.approx((low, high), abs=1e-12)
     assert (d.low, d.high) == pytest.approx((min(low, mean - half), max(high, mean + half)), abs=1e-12)

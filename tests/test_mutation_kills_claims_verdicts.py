@@ -32,6 +32,7 @@ from test_mutation_kills_claims import (
     rows_of,
 )
 
+from lerobot_factorworld.stats import decision
 from lerobot_factorworld.study.results import claims
 from lerobot_factorworld.study.results.claims import AGREES, CAPPED, NOT_RESOLVED, Comparison, decide
 
@@ -58,7 +59,7 @@ def bare(threshold=0.0, sign=+1, headroom=math.nan, resolvable=None) -> Comparis
     ids=["one replicate at the threshold, below it none", "one at it, one above it"],
 )
 def test_the_bootstrap_p_value_counts_replicates_at_the_threshold_on_both_sides(reps, expected):
-    assert claims._p_bootstrap(bare(threshold=0.5), np.array(reps)) == pytest.approx(expected, abs=1e-12)
+    assert decision.bootstrap_p_value(np.array(reps), 0.5) == pytest.approx(expected, abs=1e-12)
 
 
 @pytest.mark.parametrize(
@@ -71,7 +72,7 @@ def test_the_bootstrap_p_value_counts_replicates_at_the_threshold_on_both_sides(
     ids=["a quarter defined", "two fifths defined", "half defined"],
 )
 def test_the_bootstrap_p_value_needs_half_the_replicates_defined(reps, expected):
-    assert claims._p_bootstrap(bare(threshold=0.5), np.array(reps)) == pytest.approx(expected, abs=1e-12)
+    assert decision.bootstrap_p_value(np.array(reps), 0.5) == pytest.approx(expected, abs=1e-12)
 
 
 # --- the p-value: the larger of the bootstrap's and the t-test's --------------------------------------------------
@@ -81,8 +82,8 @@ def test_the_p_value_is_the_t_tests_from_two_seeds_on():
     """Two seeds 0.1 and 0.3 against 0.1: mean 0.2, sd 0.1 * sqrt(2), standard error 0.1, t = 1 with one degree
     of freedom (a Cauchy: P(T > 1) = 1/4), so p_t = 0.5 > the bootstrap's 0.01. One seed: no t-test, p = 1."""
     c = bare(threshold=0.1)
-    assert claims._p_value(c, 0.01, np.array([0.1, 0.3])) == pytest.approx(0.5, abs=1e-12)
-    assert claims._p_value(c, 0.01, np.array([0.3])) == 1.0
+    assert decision.decision_p_value(0.01, np.array([0.1, 0.3]), c.threshold) == pytest.approx(0.5, abs=1e-12)
+    assert decision.decision_p_value(0.01, np.array([0.3]), c.threshold) == 1.0
 
 
 @pytest.mark.parametrize(
@@ -95,7 +96,7 @@ def test_the_p_value_is_the_t_tests_from_two_seeds_on():
     ids=["off the threshold", "1 off the threshold", "at the threshold"],
 )
 def test_seeds_without_spread_give_a_t_test_p_value_of_0_off_the_threshold_and_1_on_it(per_seed, expected):
-    assert claims._p_value(bare(threshold=0.1), 0.01, np.array(per_seed)) == pytest.approx(expected, abs=1e-12)
+    assert decision.decision_p_value(0.01, np.array(per_seed), 0.1) == pytest.approx(expected, abs=1e-12)
 
 
 # --- the decision interval, the verdict ---------------------------------------------------------------------------
@@ -105,8 +106,9 @@ def test_two_seeds_give_a_decision_interval():
     """Two seeds 0.1 and 0.3: the t-interval 0.2 +- t(0.975; 1) * 0.1 (sd 0.1 * sqrt(2) over sqrt(2)) = 0.2 +-
     1.2706, wider than the bootstrap's 0.15 .. 0.25 on both sides."""
     reps = np.array([0.15, 0.2, 0.25])
-    low, high = claims.decision_interval(reps, np.array([0.1, 0.3]), 0.95)
-    assert (low, high) == pytest.approx((0.2 - T_975_DF1 * 0.1, 0.2 + T_975_DF1 * 0.1), abs=1e-12)
+    hull = decision.decision_interval(0.2, reps, np.array([0.1, 0.3]), 0.95)
+    assert (hull.point, hull.level, hull.method) == (0.2, 0.95, decision.HULL)
+    assert (hull.low, hull.high) == pytest.approx((0.2 - T_975_DF1 * 0.1, 0.2 + T_975_DF1 * 0.1), abs=1e-12)
 
 
 def test_a_headroom_exactly_at_the_smallest_resolvable_effect_is_not_capped():
@@ -130,29 +132,29 @@ def test_the_episodes_needed_start_at_one_and_stop_where_the_resolution_reaches_
     """A design resolving z / e at e episodes per cell (z = 2): an effect of 2 is resolved by one episode; one of
     0.5 by four (2 / 4 = 0.5 exactly: reaching the effect is enough), not three (0.67)."""
     c = bare(resolvable=lambda e, z: z / e)
-    assert claims._episodes_needed(c, 2.0, 2.0) == 1.0
-    assert claims._episodes_needed(c, 0.5, 2.0) == 4.0
+    assert decision.episodes_needed(c.resolvable, 2.0, 2.0) == 1.0
+    assert decision.episodes_needed(c.resolvable, 0.5, 2.0) == 4.0
 
 
 def test_the_seeds_needed_from_two_seeds_on():
     """Two seeds 1 and 3 (sd sqrt(2)): at two seeds the half-width is t(0.975; 1) * sqrt(2) / sqrt(2) = 12.706 < 13.
     Three seeds without spread: three (the seeds there are)."""
-    assert claims._seeds_needed(np.array([1.0, 3.0]), 13.0, 0.95) == 2.0
-    assert claims._seeds_needed(np.array([0.25, 0.25, 0.25]), 0.25, 0.95) == 3.0
+    assert decision.seeds_needed(np.array([1.0, 3.0]), 13.0, 0.95) == 2.0
+    assert decision.seeds_needed(np.array([0.25, 0.25, 0.25]), 0.25, 0.95) == 3.0
 
 
 def test_the_seeds_needed_search_stops_at_1000_seeds_and_wants_the_half_width_below_the_effect():
     """Seeds 1, 2, 3 (sd exactly 1) and an effect exactly the half-width at 1000 seeds, t(0.975; 999) / sqrt(1000) =
     0.06205: no count up to 1000 gives a half-width strictly below it (1000 gives it exactly), so NaN."""
-    effect = stats.t.ppf(1 - (1 - 0.95) / 2, df=999) * 1.0 / math.sqrt(1000)  # as claims computes it
-    assert math.isnan(claims._seeds_needed(np.array([1.0, 2.0, 3.0]), effect, 0.95))
+    effect = stats.t.ppf(1 - (1 - 0.95) / 2, df=999) * 1.0 / math.sqrt(1000)  # as decision computes it
+    assert math.isnan(decision.seeds_needed(np.array([1.0, 2.0, 3.0]), effect, 0.95))
 
 
 def test_one_seed_has_no_seeds_needed_and_warns_nothing():
     """One seed has no spread between seeds (its sd of ddof 1 would warn): NaN, without a warning."""
     with warnings.catch_warnings():
         warnings.simplefilter("error")
-        assert math.isnan(claims._seeds_needed(np.array([0.3]), 0.1, 0.95))
+        assert math.isnan(decision.seeds_needed(np.array([0.3]), 0.1, 0.95))
 
 
 def test_a_difference_of_exactly_0_needs_neither_episodes_nor_seeds(cfg):

@@ -1,7 +1,7 @@
-"""The power of a plan (study/plan/power.py) where mutation testing found the suite silent (docs/testing.md): a cell's
-resolvable gap against an oracle on explicit paired episodes (other sizes, other z, the edges of both searches),
-the z of the pair metric, a sweep of one radius, ``--dry-run``'s power lines word for word, and both searches'
-boundaries: a lower bound of exactly 0 (z = 0) does not resolve, a half-width equal to the gap does."""
+"""The power of a plan (stats/power.py, and study/plan/power.py's lines) where mutation testing found the suite
+silent (docs/testing.md): a cell's resolvable gap against an oracle on explicit paired episodes (other sizes,
+other z, the edges of both searches), the z of the pair metric, a sweep of one radius, ``--dry-run``'s power
+lines word for word, and both searches' boundaries: a lower bound of exactly 0 (z = 0) does not resolve, a half-width equal to the gap does."""
 
 from __future__ import annotations
 
@@ -9,18 +9,18 @@ import math
 
 import pytest
 
-from lerobot_factorworld.study import metrics
-from lerobot_factorworld.study.plan import power
+from lerobot_factorworld.stats import power, proportions
+from lerobot_factorworld.study.plan import power as plan_power
 from lerobot_factorworld.study.plan.config import EvalSettings, StudyConfig
 
 
-def _by_episodes(n: int, p_train: float, z: float = metrics.Z95) -> float:
+def _by_episodes(n: int, p_train: float, z: float = proportions.Z95) -> float:
     """The smallest share of train-only successes (no episode succeeds only when shifted) whose Newcombe interval,
     computed from explicit paired episode outcomes, excludes 0."""
     k = round(p_train * n)
     train = [True] * k + [False] * (n - k)
     for b in range(k + 1):
-        if metrics.paired_gap(train, [True] * (k - b) + [False] * (n - k + b), z)[1] > 0:
+        if proportions.paired_gap(train, [True] * (k - b) + [False] * (n - k + b), z)[1] > 0:
             return b / n
     return math.nan
 
@@ -47,7 +47,7 @@ def test_independent_outcomes_resolve_where_the_expected_tables_interval_first_e
     def lower(gap: float) -> float:  # Newcombe's lower bound on the expected table at P_F = P_T - gap
         p_f = p_train - gap
         q_t, q_f = 1 - p_train, 1 - p_f
-        return metrics.newcombe_paired(n * p_train * p_f, n * p_train * q_f, n * q_t * p_f, n * q_t * q_f)[1]
+        return proportions.newcombe_paired(n * p_train * p_f, n * p_train * q_f, n * q_t * p_f, n * q_t * q_f)[1]
 
     assert lower(d) > 0 and lower(d - step) <= 0
     if (n, p_train) == (6, 0.5):
@@ -57,7 +57,8 @@ def test_independent_outcomes_resolve_where_the_expected_tables_interval_first_e
 def test_independent_outcomes_use_the_z_they_are_given():
     d = power.cell_resolvable_gap(20, 0.8, paired=False, z=1.0)
     lower = [
-        metrics.newcombe_paired(16 * q, 16 * (1 - q), 4 * q, 4 * (1 - q), 1.0)[1] for q in (0.8 - d, 0.8 - d + 0.0004)
+        proportions.newcombe_paired(16 * q, 16 * (1 - q), 4 * q, 4 * (1 - q), 1.0)[1]
+        for q in (0.8 - d, 0.8 - d + 0.0004)
     ]
     assert lower[0] > 0 >= lower[1] and d < power.cell_resolvable_gap(20, 0.8, paired=False)
 
@@ -69,7 +70,7 @@ def test_a_mean_gap_resolves_where_the_normal_interval_first_excludes_it(pairs, 
 
     def half_width(gap: float) -> float:  # independent outcomes at P_F = P_T - gap
         p_f = p_train - gap
-        return metrics.Z95 * math.sqrt((p_train * (1 - p_train) + p_f * (1 - p_f)) / pairs)
+        return proportions.Z95 * math.sqrt((p_train * (1 - p_train) + p_f * (1 - p_f)) / pairs)
 
     assert 0 < d <= p_train and half_width(d) <= d and half_width(d - step) > d - step
     if (pairs, p_train) == (4, 0.49):
@@ -102,7 +103,7 @@ def test_dry_run_power_lines_word_for_word():
     # 3 seeds = 12 cells of 4 episodes: two factors apart at P = 0.5, 1.96 sqrt(2 x 0.25 / 48) = 0.200, the
     # pair metric that / 0.5; the slope over 0.025 and 0.075 m (Sxx = 0.00125) per 0.025 m:
     # 1.96 sqrt(0.5 / 48 / 0.00125) x 0.025 = 0.141
-    assert power.power_lines(cfg, planned=(0.25, 0.5, 0.9)) == [
+    assert plan_power.power_lines(cfg, planned=(0.25, 0.5, 0.9)) == [
         "  power: smallest effect whose 95% interval excludes 0, at planned P_T (pairs: P_min) below (4 paired "
         "episodes per cell, 3 seed(s); episode noise only, so lower bounds; summaries assume independent outcomes; "
         "methods in study/plan/power.py):",
@@ -121,8 +122,8 @@ def test_dry_run_power_lines_word_for_word():
 def test_a_zero_width_interval_resolves_the_first_gap_above_0_and_not_a_gap_of_0():
     # z = 0: Wilson's interval is the point P itself, so Newcombe's lower bound is the gap itself: a gap of exactly
     # 0 (P_F = P_T) has the lower bound 0, which does not exclude 0 ("> 0", not ">= 0")
-    assert metrics.newcombe_paired(16, 0, 0, 4, 0.0) == (0.0, 0.0, 0.0)  # no reversals, 16 of 20 train successes
-    assert metrics.newcombe_paired(5, 5, 5, 5, 0.0) == (0.0, 0.0, 0.0)  # independent at P_T = P_F = 0.5, 20 pairs
+    assert proportions.newcombe_paired(16, 0, 0, 4, 0.0) == (0.0, 0.0, 0.0)  # no reversals, 16 of 20 train successes
+    assert proportions.newcombe_paired(5, 5, 5, 5, 0.0) == (0.0, 0.0, 0.0)  # independent at P_T = P_F = 0.5, 20 pairs
     # so the first gap above 0 resolves: 1 train-only success of 20 (0.05); the grid's first step 0.5 / 2000
     assert power.cell_resolvable_gap(20, 0.8, z=0.0) == 0.05
     assert power.cell_resolvable_gap(20, 0.5, paired=False, z=0.0) == 0.5 / power.GRID == 0.00025
@@ -166,7 +167,7 @@ def test_auto_power_is_the_first_evenly_spread_count_the_rule_decides(budget, k,
     from lerobot_factorworld.study.sequential import StopRule
 
     rule = StopRule(block=10, max_episodes=budget, tolerance=0.1, confidence=0.95)
-    found, expected = power.auto_decided_within(rule, k, p_train), _decided_by_oracle(rule, k, p_train)
+    found, expected = plan_power.auto_decided_within(rule, k, p_train), _decided_by_oracle(rule, k, p_train)
     assert found[1] == expected[1] and (found[0] == expected[0] or math.isnan(found[0]) and math.isnan(expected[0]))
 
 
@@ -175,14 +176,14 @@ def test_dry_run_power_lines_under_auto_word_for_word():
     cfg.eval = EvalSettings(n_test_envs=10, episodes="auto", block=10, max_episodes=40, confidence=0.9)
     # 2 conditions at 90%: every pair favouring train decides at the first look; 7 train-only successes in 40
     # decide within the budget, at every planned P_T (each has at least 7 train successes to give)
-    lines = power.power_lines(cfg, planned=(0.25, 0.5, 0.9))
+    lines = plan_power.power_lines(cfg, planned=(0.25, 0.5, 0.9))
     assert lines[:2] == [
         "  power under eval.episodes=auto (90% anytime-valid, Bonferroni over 2 condition(s), blocks of 10, budget "
         "40; methods in study/plan/power.py): the earliest decision at 10 episodes, every pair favouring train; the "
         "smallest gap decided within the budget, at planned P_T (no reversals):",
         "                                                                P=0.25   P=0.5    P=0.9  ",
     ]
-    gaps = [power.auto_decided_within(cfg.eval.stop_rule(), 2, p)[0] for p in (0.25, 0.5, 0.9)]
+    gaps = [plan_power.auto_decided_within(cfg.eval.stop_rule(), 2, p)[0] for p in (0.25, 0.5, 0.9)]
     assert lines[2:] == ["    gap, one condition (anytime-valid; no reversals)" + " " * 10 + "   0.175" * 3]
     assert gaps == [0.175] * 3 and "Newcombe" not in "\n".join(lines)
     # 7 conditions at 95% in one block of 10: nothing can be decided, not even every pair favouring train
@@ -196,8 +197,8 @@ def test_dry_run_power_lines_under_auto_word_for_word():
         "distractors",
     ]
     cfg.eval = EvalSettings(n_test_envs=10, episodes="auto", block=10, max_episodes=10)
-    lines = power.power_lines(cfg, planned=(0.5,))
+    lines = plan_power.power_lines(cfg, planned=(0.5,))
     assert "Bonferroni over 7 condition(s)" in lines[0] and "the earliest decision never, within the budget" in lines[0]
     assert lines[2].endswith("     n/a")
     cfg.factors = ["light"]  # one condition: nothing to correct for
-    assert "Bonferroni over 1 condition(s)" in power.power_lines(cfg, planned=(0.5,))[0]
+    assert "Bonferroni over 1 condition(s)" in plan_power.power_lines(cfg, planned=(0.5,))[0]

@@ -10,7 +10,7 @@ import math
 import pytest
 
 from lerobot_factorworld.core.provenance import Provenance
-from lerobot_factorworld.study import metrics
+from lerobot_factorworld.stats import proportions
 from lerobot_factorworld.study.plan.config import MethodConfig, StudyConfig
 from lerobot_factorworld.study.results.rows import (
     RESULT_COLUMNS,
@@ -59,7 +59,7 @@ def test_rows_name_the_study_and_policy_and_hold_the_signed_paired_gap(cfg):
     by = {(r["condition"], r["widths"]): r for r in rows}
     shifted = by[("camera_pos", "default")]
     assert shifted["train_success_rate"] == 0.75 and shifted["success_rate"] == 0.375
-    gap, low, high = metrics.paired_gap(TRAIN, SHIFTED)
+    gap, low, high = proportions.paired_gap(TRAIN, SHIFTED)
     assert gap == 0.375 and (shifted["gap"], shifted["gap_ci_low"], shifted["gap_ci_high"]) == (gap, low, high)
     assert by[("camera_pos", "camera_pos=wide")]["gap"] == -0.375  # the shift succeeds more: a negative gap
     # the radius of single-factor rows of camera_pos / table_pos only: the default (narrow) and the wide sweep

@@ -11,7 +11,7 @@ from pathlib import Path
 
 import pytest
 
-from lerobot_factorworld.study.metrics import paired_gap, wilson_interval
+from lerobot_factorworld.stats.proportions import paired_gap, wilson_interval
 from lerobot_factorworld.study.results.rerun import compare_reruns
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -1,5 +1,5 @@
-"""The anytime-valid confidence sequence (study/confseq.py) and the stopping rule of ``eval.episodes=auto``
-(study/sequential.py): closed-form limits of the construction, then simulated profiles with known truth, run
+"""The anytime-valid confidence sequence (stats/confseq.py) and the stopping rule of ``eval.episodes=auto``
+(stats/stopping.py, with its settings in study/sequential.py): closed-form limits of the construction, then simulated profiles with known truth, run
 through the rule exactly as a profile runs it, whose stopped intervals must cover the truth, and whose
 declarations must be false or of the wrong sign, at most at the stated level. A naive rule that peeks at fixed-n
 intervals fails the same checks, so they can fail."""
@@ -11,17 +11,9 @@ import math
 import numpy as np
 import pytest
 
-from lerobot_factorworld.study.confseq import BET_CAP, BettingCS, candidate_grid, gap_cs, mean_cs
-from lerobot_factorworld.study.sequential import (
-    BUDGET,
-    DECIDED,
-    RUNNING,
-    WITHIN_TOLERANCE,
-    StopRule,
-    apply_rule,
-    decide,
-    running,
-)
+from lerobot_factorworld.stats.confseq import BET_CAP, BettingCS, candidate_grid, gap_cs, mean_cs
+from lerobot_factorworld.stats.stopping import BUDGET, DECIDED, RUNNING, WITHIN_TOLERANCE
+from lerobot_factorworld.study.sequential import StopRule, decide, running
 
 SIM_GRID = candidate_grid(201)  # simulations: bounds at 0.01 of a gap (outwards), the production code otherwise
 
@@ -147,7 +139,7 @@ def _simulate(stop_fn) -> dict[str, float]:
 
 
 def test_simulated_profiles_hold_the_level_under_the_stopping():
-    rates = _simulate(lambda train, shifted: apply_rule(train, shifted, RULE, grid=SIM_GRID))
+    rates = _simulate(lambda train, shifted: RULE.apply(train, shifted, grid=SIM_GRID))
     alpha = RULE.alpha
     assert rates["family_miss"] <= alpha  # every condition of a profile covered at once, at the stop
     assert rates["miss"] <= alpha / len(GAPS)  # each condition at its corrected level

@@ -16,7 +16,8 @@ import pytest
 
 from lerobot_factorworld.protocol.conditions import evaluation_suites
 from lerobot_factorworld.protocol.coverage import coverage
-from lerobot_factorworld.study import metrics, paper
+from lerobot_factorworld.stats import proportions, ranks, summaries
+from lerobot_factorworld.study import paper
 from lerobot_factorworld.study.plan.command import StudyCommand
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -26,13 +27,13 @@ ROOT = Path(__file__).resolve().parents[1]
 
 def test_wilson_interval_matches_hand_computation():
     # 8/10, z = 1.96: centre (0.8 + 0.19207) / 1.38415 = 0.71674, half 1.96 * 0.16 / 1.38415 = 0.22657
-    low, high = metrics.wilson_interval(8, 10)
+    low, high = proportions.wilson_interval(8, 10)
     assert low == pytest.approx(0.49016, abs=1e-5) and high == pytest.approx(0.94332, abs=1e-5)
-    assert metrics.wilson_interval(0, 10) == pytest.approx((0.0, 0.27753), abs=1e-5)
-    assert metrics.wilson_interval(10, 10) == pytest.approx((0.72247, 1.0), abs=1e-5)
-    assert all(math.isnan(v) for v in metrics.wilson_interval(0, 0))
+    assert proportions.wilson_interval(0, 10) == pytest.approx((0.0, 0.27753), abs=1e-5)
+    assert proportions.wilson_interval(10, 10) == pytest.approx((0.72247, 1.0), abs=1e-5)
+    assert all(math.isnan(v) for v in proportions.wilson_interval(0, 0))
     with pytest.raises(ValueError):
-        metrics.wilson_interval(11, 10)
+        proportions.wilson_interval(11, 10)
 
 
 def test_paired_gap_is_newcombes_interval():
@@ -41,15 +42,15 @@ def test_paired_gap_is_newcombes_interval():
     # lower = 0.25 - sqrt(0.44936^2 + 0.34996^2) = -0.31956; upper = 0.25 + sqrt(0.20441^2 + 0.34996^2) = 0.65529
     train = [True, True, True, False]
     shifted = [True, True, False, False]
-    gap, low, high = metrics.paired_gap(train, shifted)
+    gap, low, high = proportions.paired_gap(train, shifted)
     assert gap == pytest.approx(0.25)
     assert low == pytest.approx(-0.31956, abs=1e-4) and high == pytest.approx(0.65529, abs=1e-4)
     # Newcombe (1998) worked example: 36 both, 12 only first, 2 only second, 0 neither -> 0.0569 .. 0.3404
-    gap, low, high = metrics.paired_gap([True] * 48 + [False] * 2, [True] * 36 + [False] * 12 + [True] * 2)
+    gap, low, high = proportions.paired_gap([True] * 48 + [False] * 2, [True] * 36 + [False] * 12 + [True] * 2)
     assert (gap, low, high) == pytest.approx((0.2, 0.0569, 0.3404), abs=1e-4)
-    assert metrics.paired_gap([True] * 5, [True] * 5)[0] == 0.0
+    assert proportions.paired_gap([True] * 5, [True] * 5)[0] == 0.0
     with pytest.raises(ValueError, match="equal lengths"):
-        metrics.paired_gap([True], [True, False])
+        proportions.paired_gap([True], [True, False])
 
 
 def test_results_rows_hold_the_signed_gap_of_each_checkpoints_own_paired_episodes(tmp_path):
@@ -102,20 +103,20 @@ def test_results_rows_hold_the_signed_gap_of_each_checkpoints_own_paired_episode
 
 
 def test_pair_metric_interaction_mean_se_and_spearman():
-    assert metrics.pair_metric(0.4, 0.5, 0.8) == pytest.approx(-0.2)  # (0.4 - 0.5) / 0.5
-    assert metrics.pair_metric(0.63, 0.6, 0.9) == pytest.approx(0.05)
-    assert math.isnan(metrics.pair_metric(0.1, 0.0, 0.5))  # the harder factor never succeeds
-    assert metrics.interaction(0.5, 0.2, 0.25) == pytest.approx(0.05)
-    mean, se = metrics.mean_se([0.2, 0.4, 0.6])
+    assert summaries.pair_metric(0.4, 0.5, 0.8) == pytest.approx(-0.2)  # (0.4 - 0.5) / 0.5
+    assert summaries.pair_metric(0.63, 0.6, 0.9) == pytest.approx(0.05)
+    assert math.isnan(summaries.pair_metric(0.1, 0.0, 0.5))  # the harder factor never succeeds
+    assert summaries.interaction(0.5, 0.2, 0.25) == pytest.approx(0.05)
+    mean, se = summaries.mean_se([0.2, 0.4, 0.6])
     assert mean == pytest.approx(0.4) and se == pytest.approx(0.2 / math.sqrt(3))
-    assert math.isnan(metrics.mean_se([0.3])[1])
-    assert metrics.rank_hardest_first({"a": 0.3, "b": 0.1, "c": 0.3}) == {"a": 1.5, "c": 1.5, "b": 3.0}
+    assert math.isnan(summaries.mean_se([0.3])[1])
+    assert ranks.rank_hardest_first({"a": 0.3, "b": 0.1, "c": 0.3}) == {"a": 1.5, "c": 1.5, "b": 3.0}
     # 1 - 6 * (0 + 1 + 1) / (3 * 8) = 0.5
-    assert metrics.spearman({"a": 1, "b": 2, "c": 3}, {"a": 1, "b": 3, "c": 2}) == pytest.approx(0.5)
+    assert ranks.spearman({"a": 1, "b": 2, "c": 3}, {"a": 1, "b": 3, "c": 2}) == pytest.approx(0.5)
     paper_order = sorted(paper.PAPER_FACTOR_RANKS, key=paper.PAPER_FACTOR_RANKS.get)
     reverse = {f: float(len(paper_order) - i) for i, f in enumerate(paper_order)}
-    assert metrics.spearman(reverse, paper.PAPER_FACTOR_RANKS) < -0.9
-    assert math.isnan(metrics.spearman({"a": 1, "b": 2}, {"a": 1, "b": 2}))
+    assert ranks.spearman(reverse, paper.PAPER_FACTOR_RANKS) < -0.9
+    assert math.isnan(ranks.spearman({"a": 1, "b": 2}, {"a": 1, "b": 2}))
 
 
 def test_the_pairs_section_counts_cells_whose_pair_metric_is_undefined():

@@ -25,7 +25,7 @@ from scipy import stats
 from test_claims import _row, rows_of
 
 from lerobot_factorworld import cli
-from lerobot_factorworld.study import metrics
+from lerobot_factorworld.stats import proportions
 from lerobot_factorworld.study.plan.claim_config import ClaimConfig
 from lerobot_factorworld.study.plan.config import MethodConfig, StudyConfig
 from lerobot_factorworld.study.report.claims_markdown import claims_section, to_resolve
@@ -282,7 +282,7 @@ def test_a_bug_at_the_command_line_is_an_internal_error_with_its_traceback_in_a_
         first, second = (1, 2, 3)  # noqa: F841  (the bug: an unpacking that fails)
 
     def refusing(args):
-        metrics.wilson_interval(11, 10)  # a deliberate refusal inside the package
+        proportions.wilson_interval(11, 10)  # a deliberate refusal inside the package
 
     monkeypatch.setitem(cli.COMMANDS, "buggy", buggy)
     monkeypatch.setitem(cli.COMMANDS, "refusing", refusing)

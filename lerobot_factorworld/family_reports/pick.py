@@ -17,7 +17,7 @@ from typing import Any
 from ..core.io import atomic_write_text, read_table
 from ..pick.records import BY, MEASURE_BY, breakdown, measure_breakdown
 from ..protocol.conditions import TRAIN_SUITE
-from ..study.metrics import spearman
+from ..stats.ranks import spearman
 from ..study.paper import PAPER_REAL_ROBOT
 from ..study.plan.config import StudyConfig
 from ..study.report.family_report import FamilyReport

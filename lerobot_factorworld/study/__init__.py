@@ -1,10 +1,9 @@
 """The generalization-gap study (``factorworld study``), as its pipeline, bottom-up (each subpackage imports only
 from those listed before it; the layer contract in pyproject.toml checks it):
 
-- ``confseq``: anytime-valid confidence sequences for bounded means (the hedged betting construction);
-- ``sequential``: the stopping rule of ``eval.episodes=auto`` built on them;
-- ``metrics``, ``paper``: pure statistics (Wilson and Newcombe intervals, the pair metric, Spearman) and the
-  paper's reference numbers;
+- ``sequential``: the settings of ``eval.episodes=auto``'s stopping rule (its computation, and every other
+  statistic, is :mod:`lerobot_factorworld.stats`, beneath the whole package);
+- ``paper``: the paper's reference numbers;
 - ``run``: one step (collect, ``lerobot-train``, LeRobot's evaluation), cached by its key, and the executors;
 - ``plan``: the study's config, its grid as steps, the ``--dry-run`` cost and power, stale steps;
 - ``results``: ``results.csv``, ``episodes.parquet``, the aggregations and the claims' verdicts;

@@ -3,8 +3,8 @@
 Why: a profile's factors differ in how many episodes they need (a gap of +0.44 is resolved in twenty paired
 episodes, a gap of +0.01 not in a thousand), and stopping on a fixed-n interval looked at after every block
 inflates false findings. Here every shifted condition carries an anytime-valid confidence sequence for its
-paired gap (``confseq.py``: the betting construction of Waudby-Smith and Ramdas), corrected for the number of
-conditions by **Bonferroni**: with ``k`` shifted conditions each sequence is at level ``1 - alpha / k``, so with
+paired gap (``stats/confseq.py``: the betting construction of Waudby-Smith and Ramdas), corrected for the number
+of conditions by **Bonferroni**: with ``k`` shifted conditions each sequence is at level ``1 - alpha / k``, so with
 probability at least ``1 - alpha`` every condition's interval holds at every look, whatever the stopping.
 
 After each block (the same reset seeds in every condition) a still-running condition stops when its interval
@@ -15,7 +15,9 @@ After each block (the same reset seeds in every condition) a still-running condi
 
 ``train`` runs as long as any condition it pairs with does. The rule is a deterministic function of the outcomes
 in seed order, so the same seeds give the same episodes and the same stopping points. Success rates get
-sequences of their own (Bonferroni over the ``k + 1`` conditions), for the report.
+sequences of their own (Bonferroni over the ``k + 1`` conditions), for the report. The rule's computation on the
+outcomes is :func:`lerobot_factorworld.stats.stopping.apply_rule`; this module holds its settings, as a study
+config and a step key state them, and what a run records of each condition's stop.
 """
 
 from __future__ import annotations
@@ -25,11 +27,11 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
-from .confseq import BettingCS, mean_cs
+from ..stats.confseq import mean_cs
+from ..stats.multitest import BONFERRONI, rank_levels
+from ..stats.stopping import REASONS, Stops, apply_rule
 
 AUTO = "auto"  # eval.episodes' value that asks for this rule
-RUNNING, DECIDED, WITHIN_TOLERANCE, BUDGET = 0, 1, 2, 3
-REASONS = {DECIDED: "decided", WITHIN_TOLERANCE: "within tolerance", BUDGET: "budget"}
 PAIRED = "paired"  # train's reason: it ran as long as the condition that ran longest
 CONSTRUCTION = "betting-hedged-bonferroni"  # what the rule computes: in every step key that uses it
 INTERVAL_LABEL = "anytime-valid"
@@ -66,70 +68,31 @@ class StopRule:
         return 1.0 - self.confidence
 
     def gap_alpha(self, k: int) -> float:
-        """Each of ``k`` gap sequences' error (Bonferroni)."""
-        return self.alpha / max(1, k)
+        """Each of ``k`` gap sequences' error (Bonferroni: ``alpha / k``)."""
+        return rank_levels(max(1, k), self.alpha, BONFERRONI)[0]
 
     def success_alpha(self, k: int) -> float:
         """Each success-rate sequence's error, over ``train`` and ``k`` shifted conditions (Bonferroni)."""
-        return self.alpha / (k + 1)
+        return rank_levels(k + 1, self.alpha, BONFERRONI)[0]
 
     def to_dict(self) -> dict:
         return {**asdict(self), "construction": CONSTRUCTION}
 
+    def apply(
+        self, train: np.ndarray, shifted: np.ndarray, k: int | None = None, grid: np.ndarray | None = None
+    ) -> Stops:
+        """The rule on outcomes in seed order (:func:`~lerobot_factorworld.stats.stopping.apply_rule`): ``train``
+        ``(*batch, T)``, ``shifted`` ``(*batch, k, T)``; ``k``: the conditions the correction counts (default:
+        ``shifted``'s); ``grid``: the candidate means (default ``stats.confseq``'s)."""
+        k_here = np.shape(shifted)[-2]
+        return apply_rule(
+            train, shifted, block=self.block, max_episodes=self.max_episodes, tolerance=self.tolerance,
+            alpha=self.gap_alpha(k or k_here), grid=grid,
+        )  # fmt: skip
+
     @classmethod
     def from_dict(cls, data: Mapping) -> StopRule:
         return cls(int(data["block"]), int(data["max_episodes"]), float(data["tolerance"]), float(data["confidence"]))
-
-
-@dataclass(frozen=True)
-class Stops:
-    """Where the rule stopped each sequence: arrays of shape ``(*batch, k)``."""
-
-    episodes: np.ndarray  # paired episodes used (the data's length where still running)
-    reason: np.ndarray  # RUNNING, DECIDED, WITHIN_TOLERANCE or BUDGET
-    gap: np.ndarray  # mean paired gap over those episodes
-    low: np.ndarray  # the anytime-valid interval at the stop
-    high: np.ndarray
-
-
-def apply_rule(
-    train: np.ndarray, shifted: np.ndarray, rule: StopRule, k: int | None = None, grid: np.ndarray | None = None
-) -> Stops:
-    """The rule on outcomes in seed order: ``train`` of shape ``(*batch, T)``, ``shifted`` ``(*batch, k, T)``
-    (``T`` the episodes run so far, a multiple of ``rule.block``, or all there are: a replay caps the budget
-    there). A condition not stopped within ``T < max_episodes`` is ``RUNNING``. ``k``: the conditions the
-    correction counts (default: ``shifted``'s); ``grid``: the candidate means (default ``confseq``'s; simulations
-    use a coarser one, whose bounds are stepped outwards to it)."""
-    train = np.asarray(train, dtype=float)
-    shifted = np.asarray(shifted, dtype=float)
-    batch, k_here, total = shifted.shape[:-2], shifted.shape[-2], shifted.shape[-1]
-    if train.shape != (*batch, total):
-        raise ValueError(f"train outcomes of shape {train.shape} do not pair with shifted ones {shifted.shape}")
-    d = train[..., None, :] - shifted  # (*batch, k, T) in {-1, 0, 1}
-    cs = BettingCS(rule.gap_alpha(k or k_here), (*batch, k_here), *(() if grid is None else (grid,)))
-    shape = (*batch, k_here)
-    episodes, reason = np.zeros(shape, dtype=int), np.full(shape, RUNNING)
-    low, high, gap = np.full(shape, -1.0), np.full(shape, 1.0), np.zeros(shape)
-    budget = min(rule.max_episodes, total)
-    for end in range(rule.block, budget + rule.block, rule.block):
-        end = min(end, budget)
-        cs.extend((d[..., cs.t : end] + 1.0) / 2.0)
-        lo, hi = cs.bounds()
-        lo, hi = 2.0 * lo - 1.0, 2.0 * hi - 1.0
-        running = reason == RUNNING
-        now = np.where(
-            (lo > 0) | (hi < 0),
-            DECIDED,
-            np.where((lo >= -rule.tolerance) & (hi <= rule.tolerance), WITHIN_TOLERANCE, RUNNING),
-        )
-        if end >= rule.max_episodes:
-            now = np.where(now == RUNNING, BUDGET, now)
-        stop = running & (now != RUNNING)
-        reason = np.where(stop, now, reason)
-        low, high = np.where(running, lo, low), np.where(running, hi, high)
-        episodes = np.where(running, end, episodes)
-        gap = np.where(running, d[..., :end].mean(axis=-1), gap)
-    return Stops(episodes, reason, gap, low, high)
 
 
 @dataclass(frozen=True)
@@ -163,7 +126,7 @@ def decide(train: Sequence[bool], shifted: Mapping[str, Sequence[bool]], rule: S
         outcomes = np.asarray(shifted[name], dtype=float)[:total]
         padded[i, : len(outcomes)] = outcomes
     lengths = {name: min(len(shifted[name]), total) for name in names}
-    stops = apply_rule(np.asarray(train, dtype=float), padded, rule)
+    stops = rule.apply(np.asarray(train, dtype=float), padded)
     out: dict[str, ConditionStop] = {}
     s_alpha = rule.success_alpha(k)
     for i, name in enumerate(names):

@@ -5,8 +5,8 @@ the report can tell from 0, for the plan's episode and seed counts.
 (the expected outcome counts plugged in). Methods, per quantity:
 
 - **one cell's gap** P_T - P_F over ``episodes`` paired episodes: Newcombe's paired interval (the one in
-  ``results.csv``, :func:`metrics.newcombe_paired`) on the expected 2x2 table, in two cases: *no
-  reversals*, no episode succeeds only when shifted (every shifted success is also a train success; whole
+  ``results.csv``, :func:`lerobot_factorworld.stats.proportions.newcombe_paired`) on the expected 2x2 table, in
+  two cases: *no reversals*, no episode succeeds only when shifted (every shifted success is also a train success; whole
   episode counts), and *independent*, the two conditions' outcomes independent given the rates
   (a = n P_T P_F, ...). Real pairs usually lie in between;
 - **a factor's mean gap over m cells** (over tasks, N and seeds; or over tasks and seeds at one N): the
@@ -20,7 +20,8 @@ the report can tell from 0, for the plan's episode and seed counts.
 - **the radius slope**: the least-squares slope over the sweep's radii, each radius's mean gap over m
   cells with variance 2 P (1 - P) / (m * episodes) (independent outcomes, small gaps), per 0.025 m.
 
-Only episode noise is counted: training seeds differ from each other too, which widens every summary's
+The functions of one design's numbers are :mod:`lerobot_factorworld.stats.power`; this module applies them to a
+study config. Only episode noise is counted: training seeds differ from each other too, which widens every summary's
 interval, so every number here is a lower bound on what the study needs (the two-task study measured
 standard errors of 0.01-0.09 on factor gaps over 3 seeds).
 
@@ -37,70 +38,19 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from ..metrics import Z95, newcombe_paired
-from ..sequential import DECIDED, StopRule, apply_rule
+from ...stats.power import (
+    cell_resolvable_gap,
+    difference_resolvable,
+    mean_resolvable_gap,
+    pair_metric_resolvable,
+    slope_resolvable,
+)
+from ...stats.stopping import DECIDED
+from ..sequential import StopRule
 from .config import RADII_M, StudyConfig
 
 PLANNED_P = (0.5, 0.8, 0.95)  # planned success rates on the training environments (P_T), or P_min for pairs
 RADIUS_STEP_M = 0.025  # slopes per step of the appendix's radii (as the report)
-GRID = 2000  # resolution of the searches over a gap in [0, P_T]
-
-
-def cell_resolvable_gap(episodes: int, p_train: float, paired: bool = True, z: float = Z95) -> float:
-    """Smallest gap whose Newcombe paired 95% interval excludes 0 in a cell of ``episodes`` paired episodes
-    at train success ``p_train``: best case (``paired``: no episode succeeds only when shifted) on whole
-    episode counts, or independent outcomes on expected counts. NaN if even P_F = 0 is not resolved."""
-    n = episodes
-    k_train = round(p_train * n)
-    if paired:
-        for b in range(0, k_train + 1):  # b train-only successes: a = k_train - b, c = 0
-            if newcombe_paired(k_train - b, b, 0, n - k_train, z)[1] > 0:
-                return b / n
-        return math.nan
-    for i in range(GRID + 1):
-        d = p_train * i / GRID
-        p_f = p_train - d
-        a, b = n * p_train * p_f, n * p_train * (1 - p_f)
-        c, dd = n * (1 - p_train) * p_f, n * (1 - p_train) * (1 - p_f)
-        if newcombe_paired(a, b, c, dd, z)[1] > 0:
-            return d
-    return math.nan
-
-
-def mean_resolvable_gap(pairs: int, p_train: float, z: float = Z95) -> float:
-    """Smallest mean gap over ``pairs`` episode pairs (all cells together) whose normal-approximation 95%
-    interval excludes 0, outcomes independent given the rates (at P_T = 0.5 the closed form is
-    sqrt(z^2 / 2 / (pairs + z^2)), up to the search's resolution). NaN at P_T = 0, where no gap can open, as
-    ``cell_resolvable_gap`` gives."""
-    if p_train <= 0:
-        return math.nan
-    for i in range(1, GRID + 1):
-        d = p_train * i / GRID
-        p_f = p_train - d
-        if z * math.sqrt((p_train * (1 - p_train) + p_f * (1 - p_f)) / pairs) <= d:
-            return d
-    return math.nan
-
-
-def difference_resolvable(pairs: int, p: float, z: float = Z95) -> float:
-    """Smallest difference between two success rates near ``p``, each over ``pairs`` episodes (independent
-    outcomes), that a 95% normal interval tells from 0."""
-    return z * math.sqrt(2 * p * (1 - p) / pairs)
-
-
-def pair_metric_resolvable(pairs: int, p_min: float, z: float = Z95) -> float:
-    """Smallest pair metric |(P_A+B - P_min) / P_min| that a 95% normal interval tells from 0."""
-    return difference_resolvable(pairs, p_min, z) / p_min
-
-
-def slope_resolvable(pairs_per_radius: int, radii: Sequence[float], p: float, z: float = Z95) -> float:
-    """Smallest least-squares slope of the gap on the radius (gap per metre) that a 95% normal interval
-    tells from 0, each radius's mean gap over ``pairs_per_radius`` episodes (independent, small gaps)."""
-    mean = sum(radii) / len(radii)
-    sxx = sum((r - mean) ** 2 for r in radii)
-    if sxx == 0:
-        return math.nan
-    return z * math.sqrt(2 * p * (1 - p) / pairs_per_radius / sxx)
 
 
 def _fmt(value: float) -> str:
@@ -116,7 +66,7 @@ def auto_decided_within(rule: StopRule, k: int, p_train: float) -> tuple[float, 
     train = np.zeros((len(counts), n))
     for row, b in enumerate(counts):  # b train-only successes at evenly spaced seeds
         train[row, np.floor(np.arange(b) * n / max(b, 1)).astype(int)] = 1.0
-    stops = apply_rule(train, np.zeros((len(counts), 1, n)), rule, k=k)
+    stops = rule.apply(train, np.zeros((len(counts), 1, n)), k=k)
     decided = np.flatnonzero(stops.reason[:, 0] == DECIDED)
     if not len(decided):
         return math.nan, 0
@@ -126,7 +76,7 @@ def auto_decided_within(rule: StopRule, k: int, p_train: float) -> tuple[float, 
 def auto_power_lines(cfg: StudyConfig, planned: Sequence[float] = PLANNED_P) -> list[str]:
     """The ``--dry-run`` lines under ``eval.episodes=auto``: what its rule decides within the budget."""
     rule, k = cfg.eval.stop_rule(), max(1, len(cfg.conditions()))
-    every = apply_rule(np.ones((1, rule.max_episodes)), np.zeros((1, 1, rule.max_episodes)), rule, k=k)
+    every = rule.apply(np.ones((1, rule.max_episodes)), np.zeros((1, 1, rule.max_episodes)), k=k)
     earliest = int(every.episodes[0, 0]) if every.reason[0, 0] == DECIDED else 0  # every pair favouring train
     found = [auto_decided_within(rule, k, p) for p in planned]
     header = "".join(f"  P={p:<5g}" for p in planned)

@@ -6,7 +6,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 
-from ..metrics import BOOTSTRAP_RESAMPLES
+from ...stats.bootstrap import BOOTSTRAP_RESAMPLES
 from ..results.claims import AGREES, CAPPED, CONFOUNDED, DISAGREES, ClaimVerdict, Decided
 
 CLAIMS_HEADING = "## The paper's claims"

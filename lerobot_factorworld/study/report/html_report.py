@@ -24,7 +24,8 @@ from pathlib import Path
 
 from ...core.io import atomic_write_text
 from ...protocol.conditions import TRAIN_SUITE
-from ..metrics import BOOTSTRAP_RESAMPLES, rank_hardest_first
+from ...stats.bootstrap import BOOTSTRAP_RESAMPLES
+from ...stats.ranks import rank_hardest_first
 from ..paper import PAPER_FACTOR_RANKS
 from ..plan.config import StudyConfig
 from ..results.aggregate import (

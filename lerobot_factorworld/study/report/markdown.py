@@ -12,8 +12,9 @@ from pathlib import Path
 from ...core.provenance import UNKNOWN
 from ...envs.lerobot_obs import FACTORWORLD_OBS
 from ...protocol.conditions import TRAIN_SUITE
+from ...stats.bootstrap import BOOTSTRAP_RESAMPLES, BOOTSTRAP_SEED
+from ...stats.ranks import rank_hardest_first, rerank, spearman
 from ...tasks import step_limit
-from ..metrics import BOOTSTRAP_RESAMPLES, BOOTSTRAP_SEED, rank_hardest_first, rerank, spearman
 from ..paper import (
     PAPER_FACTOR_GROUPS,
     PAPER_FACTOR_RANKS,

@@ -11,7 +11,7 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 
 from ...protocol.conditions import TRAIN_SUITE
-from ..metrics import rank_hardest_first
+from ...stats.ranks import rank_hardest_first
 from ..paper import PAPER_PAIR_TOLERANCE
 from ..plan.config import StudyConfig
 from ..results.aggregate import (

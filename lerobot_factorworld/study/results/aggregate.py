@@ -5,7 +5,7 @@ Every selector averages over tasks (and any column not grouped by) per seed, the
 standard error and number of seeds per group (:func:`summary`).
 
 The interval selectors at the end give the report's 95% intervals: each puts the rows it needs into
-(seed x cell) arrays (:class:`Cells`) and runs the seed-level bootstrap of ``metrics.seed_bootstrap``
+(seed x cell) arrays (:class:`Cells`) and runs the seed-level bootstrap of ``stats.bootstrap.seed_bootstrap``
 on the same computation as the point estimate (resampling training seeds, then episodes within each
 cell; ``BOOTSTRAP_RESAMPLES`` resamples from the fixed ``BOOTSTRAP_SEED``).
 """
@@ -21,7 +21,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from ...protocol.conditions import PAIR_SEPARATOR, TRAIN_SUITE
-from ..metrics import (
+from ...stats.bootstrap import percentile_interval, seed_bootstrap
+from ...stats.proportions import wilson_interval
+from ...stats.ranks import rank_hardest_first, rerank, spearman
+from ...stats.summaries import (
     count_within,
     group_mean,
     interaction,
@@ -29,13 +32,7 @@ from ..metrics import (
     ols_slope,
     pair_metric,
     pair_metric_array,
-    percentile_interval,
     pooled_rates,
-    rank_hardest_first,
-    rerank,
-    seed_bootstrap,
-    spearman,
-    wilson_interval,
 )
 from ..plan.grid import DEFAULT_WIDTHS
 from .rows import parse_stage_counts
@@ -187,7 +184,7 @@ def stage_counts(rows: Iterable[dict]) -> dict[tuple, dict[str, int]]:
     return out
 
 
-# --- intervals: the seed-level bootstrap (metrics.seed_bootstrap) on (seed x cell) arrays -----------
+# --- intervals: the seed-level bootstrap (stats.bootstrap.seed_bootstrap) on (seed x cell) arrays -----------
 
 Interval = tuple[float, float, float]  # (point estimate, 95% interval low, high)
 CELL_KEYS = ("method", "task", "n_train_envs", "widths", "condition")
@@ -215,7 +212,7 @@ class Cells:
         )
 
     def bootstrap(self, statistic: Callable[[np.ndarray, np.ndarray], np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
-        """:func:`metrics.seed_bootstrap` drawn by identity (the training seeds, each column's cell key): a cell
+        """:func:`~lerobot_factorworld.stats.bootstrap.seed_bootstrap` drawn by identity (the training seeds, each column's cell key): a cell
         gets the same replicates in every table and report that holds it with the same seeds."""
         return seed_bootstrap(self.rates, self.episodes, statistic, seed_ids=self.seeds, cell_ids=self.keys)
 

@@ -19,8 +19,12 @@ by the success rates: a gap by P_T, a difference of gaps by the easier factor's 
 itself) is below the smallest effect the design resolves, else **not resolved**. A claim of several
 comparisons (an ordering, a band) disagrees if one does, agrees if all do, is capped if every comparison left
 is, and is not resolved otherwise. "Not resolved" comes with the smallest effect this design resolves
-(``power.py``: episode noise only, a lower bound) and what would resolve the observed effect: the episodes per
-cell at these seeds (episode noise), and the seeds at the observed spread between seeds.
+(``stats/power.py``: episode noise only, a lower bound) and what would resolve the observed effect: the episodes
+per cell at these seeds (episode noise), and the seeds at the observed spread between seeds.
+
+The numbers themselves (the decision interval and p-values, Holm's levels and step-down, the power and the sample
+sizes) are the statistics library's (``stats/decision.py``, ``multitest.py``, ``power.py``); this module says what
+they are computed on and turns them into verdicts.
 """
 
 from __future__ import annotations
@@ -30,28 +34,29 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
-from scipy import stats
 
 from ...protocol.conditions import PAIR_SEPARATOR, TRAIN_SUITE
-from ..metrics import (
-    group_mean,
-    nanmean,
-    ols_slope,
-    pair_metric_array,
-    percentile_interval,
-    pooled_rates,
-    two_sided_z,
+from ...stats.bootstrap import percentile_interval
+from ...stats.decision import (
+    bootstrap_p_value,
+    decision_interval,
+    decision_p_value,
+    episodes_needed,
+    seeds_needed,
 )
+from ...stats.estimate import Estimate
+from ...stats.multitest import HOLM, rank_levels, step_down
+from ...stats.power import difference_resolvable, mean_resolvable_gap, pair_metric_resolvable, slope_resolvable
+from ...stats.proportions import two_sided_z
+from ...stats.summaries import group_mean, nanmean, ols_slope, pair_metric_array, pooled_rates
 from ..plan.claim_config import ClaimConfig
 from ..plan.config import StudyConfig
-from ..plan.power import difference_resolvable, mean_resolvable_gap, pair_metric_resolvable, slope_resolvable
 from .aggregate import Cells, cell_gaps, cells, main_grid, radius_rows, shared_cell_rows
 
 ALPHA = 0.05
 AGREES, DISAGREES, NOT_RESOLVED, CAPPED = "agrees", "disagrees", "not resolved", "capped"
 CONFOUNDED = "confounded (P_T fell)"  # a gap resolved smaller, but only because success fell
 VERDICTS = (AGREES, DISAGREES, NOT_RESOLVED, CAPPED, CONFOUNDED)
-MAX_EPISODES = 100_000  # the search for the episodes that would resolve an effect stops here
 
 PAPER_TIERS_STATED = [
     ["camera_pos", "object_texture", "table_pos", "table_texture"],
@@ -73,7 +78,7 @@ class Comparison:
     threshold: float
     sign: int
     headroom: float  # the most the statistic can move from the threshold the paper's way (NaN: unbounded)
-    resolvable: Callable[[float, float], float]  # (episodes per cell, z) -> smallest |effect| resolved (power.py)
+    resolvable: Callable[[float, float], float]  # (episodes per cell, z) -> smallest |effect| resolved (stats/power.py)
     contrary: float = math.nan  # the most it can move from the threshold the other way (NaN: unbounded)
     success: SuccessChange | None = None  # for a gap that shrinks: the treatment's P_T and P_F minus the baseline's
 
@@ -393,8 +398,8 @@ class _Evidence:
 
 def _evidence(c: Comparison) -> _Evidence:
     point, reps, per_seed = _replicates(c.table, c.statistic)
-    p_boot = _p_bootstrap(c, reps)
-    return _Evidence(point, reps, per_seed, _p_value(c, p_boot, per_seed), p_boot)
+    p_boot = bootstrap_p_value(reps, c.threshold)
+    return _Evidence(point, reps, per_seed, decision_p_value(p_boot, per_seed, c.threshold), p_boot)
 
 
 def _replicates(table: Cells, statistic: Statistic) -> tuple[float, np.ndarray, np.ndarray]:
@@ -406,38 +411,6 @@ def _replicates(table: Cells, statistic: Statistic) -> tuple[float, np.ndarray, 
          for s in range(len(table.seeds))]
     )  # fmt: skip
     return float(point), np.asarray(reps, dtype=float), per_seed[np.isfinite(per_seed)]
-
-
-def _p_bootstrap(c: Comparison, reps: np.ndarray) -> float:
-    """Two-sided bootstrap p-value against the threshold (1 where the statistic is undefined too often)."""
-    x = reps[np.isfinite(reps)] - c.threshold
-    if x.size < len(reps) / 2:
-        return 1.0
-    return float(min(1.0, 2 * (min(np.sum(x <= 0), np.sum(x >= 0)) + 1) / (x.size + 1)))
-
-
-def _p_value(c: Comparison, p_boot: float, per_seed: np.ndarray) -> float:
-    """Two-sided p-value against the threshold: the larger of the bootstrap's and the t-test's (1 with one seed)."""
-    if len(per_seed) < 2:
-        return 1.0
-    sd = float(np.std(per_seed, ddof=1))
-    diff = float(np.mean(per_seed)) - c.threshold
-    if sd == 0:
-        p_t = 0.0 if diff != 0 else 1.0
-    else:
-        p_t = float(2 * stats.t.sf(abs(diff) / (sd / math.sqrt(len(per_seed))), df=len(per_seed) - 1))
-    return max(p_boot, p_t)
-
-
-def decision_interval(reps: np.ndarray, per_seed: np.ndarray, level: float) -> tuple[float, float]:
-    """The hull of the bootstrap's percentile interval and the t-interval over seeds at ``level`` (NaN
-    with fewer than two seeds or a bootstrap undefined too often: no seed-level interval)."""
-    lo, hi = percentile_interval(reps, level=level)
-    if len(per_seed) < 2 or not (np.isfinite(lo) and np.isfinite(hi)):
-        return math.nan, math.nan
-    half = stats.t.ppf(1 - (1 - level) / 2, df=len(per_seed) - 1) * np.std(per_seed, ddof=1) / math.sqrt(len(per_seed))
-    mean = float(np.mean(per_seed))
-    return min(float(lo), mean - half), max(float(hi), mean + half)
 
 
 def _verdict(c: Comparison, low: float, high: float, smallest: float, *, counts_known: bool) -> str:
@@ -462,37 +435,12 @@ def _uncapped_the_other_way(c: Comparison, point: float, smallest: float) -> boo
     return bool(leans and np.isfinite(smallest) and not (np.isfinite(c.contrary) and c.contrary < smallest))
 
 
-def _episodes_needed(c: Comparison, effect: float, z: float) -> float:
-    """Episodes per cell (at these seeds) whose power-code resolution reaches ``effect`` (NaN: none does)."""
-    if not (np.isfinite(effect) and effect > 0):
-        return math.nan
-    e = 1
-    while e <= MAX_EPISODES:
-        resolved = c.resolvable(e, z)
-        if np.isfinite(resolved) and resolved <= effect:
-            return float(e)
-        e = max(e + 1, math.ceil(e * 1.1))
-    return math.nan
-
-
-def _seeds_needed(per_seed: np.ndarray, effect: float, level: float) -> float:
-    """Seeds whose t-interval (at ``level``) at the observed spread between seeds excludes ``effect``."""
-    if len(per_seed) < 2 or not effect > 0:
-        return math.nan
-    sd = float(np.std(per_seed, ddof=1))
-    if sd == 0:
-        return float(len(per_seed))
-    for s in range(2, 1001):
-        if stats.t.ppf(1 - (1 - level) / 2, df=s - 1) * sd / math.sqrt(s) < effect:
-            return float(s)
-    return math.nan
-
-
 def _change(table: Cells, statistic: Statistic, level: float) -> tuple[float, float, float]:
     """A success change with its interval at ``level``: the decision interval (bootstrap and t, hulled), or with
     one seed the bootstrap's alone (episodes only)."""
     point, reps, per_seed = _replicates(table, statistic)
-    low, high = decision_interval(reps, per_seed, level)
+    hull = decision_interval(point, reps, per_seed, level)
+    low, high = hull.low, hull.high
     if not np.isfinite(low):  # one seed (both ends are NaN together)
         low, high = (float(x) for x in percentile_interval(reps, level=level))
     return point, float(low), float(high)
@@ -586,13 +534,13 @@ def decide_together(
     keys = list(unique)
     evidence = {key: _evidence(unique[key]) for key in keys}
     order = sorted(keys, key=lambda key: (evidence[key].p_value, evidence[key].p_bootstrap, key[1], key[0]))
-    decided: dict[tuple, Decided] = {}
-    stopped = False
-    for rank, key in enumerate(order):
-        c, ev = unique[key], evidence[key]
-        level = 1 - ALPHA / (len(order) - rank)
-        decided[key], resolved = _decide_one(c, ev, level, stopped)
-        stopped = stopped or not resolved
+    levels = [1 - a for a in rank_levels(len(order), ALPHA, HOLM)]  # Holm: the k-th smallest p at ALPHA / (m - k)
+    first = [_interval(unique[key], evidence[key], level) for key, level in zip(order, levels)]
+    held = step_down([looked.verdict in (AGREES, DISAGREES) for looked in first])  # Holm's step-down
+    decided = {
+        key: _decide_one(unique[key], evidence[key], looked, rejected)
+        for key, looked, rejected in zip(order, first, held)
+    }
     out: list[list[ClaimVerdict]] = []
     for i, part in enumerate(parts):
         mine = []
@@ -603,19 +551,36 @@ def decide_together(
     return out
 
 
-def _decide_one(c: Comparison, ev: _Evidence, level: float, stopped: bool) -> tuple[Decided, bool]:
-    """One comparison at its Holm level: its :class:`Decided` and whether its null was rejected (the gap resolved
-    either way; a confounded shrink's gap did shrink, so Holm goes on)."""
-    low, high = decision_interval(ev.reps, ev.per_seed, level)
+@dataclass(frozen=True)
+class _Looked:
+    """A comparison at its Holm level, before the step-down: its decision interval and its verdict on it alone."""
+
+    level: float
+    interval: Estimate
+    z: float
+    smallest: float
+    verdict: str
+
+
+def _interval(c: Comparison, ev: _Evidence, level: float) -> _Looked:
+    """One comparison at its own level: its decision interval and the verdict that interval gives, as if it were
+    the only comparison (the step-down may yet leave it not resolved)."""
+    interval = decision_interval(ev.point, ev.reps, ev.per_seed, level)
     z = two_sided_z(level)
     episodes = _episodes(c.table)
     smallest = c.resolvable(episodes, z) if np.isfinite(episodes) else math.nan  # counts unknown: no power
-    verdict = _verdict(c, low, high, smallest, counts_known=bool(np.isfinite(episodes)))
+    verdict = _verdict(c, interval.low, interval.high, smallest, counts_known=bool(np.isfinite(episodes)))
     if verdict == CAPPED and _uncapped_the_other_way(c, ev.point, smallest):
         verdict = NOT_RESOLVED  # it cannot agree, but it may yet disagree
-    if stopped and verdict in (AGREES, DISAGREES):
+    return _Looked(level, interval, z, smallest, verdict)
+
+
+def _decide_one(c: Comparison, ev: _Evidence, looked: _Looked, rejected: bool) -> Decided:
+    """One comparison decided: ``rejected`` is Holm's step-down on its null (false once an earlier comparison was
+    left unresolved, so it is not resolved either; a confounded shrink's gap did shrink, so Holm goes on past it)."""
+    level, verdict, smallest = looked.level, looked.verdict, looked.smallest
+    if not rejected and verdict in (AGREES, DISAGREES):
         verdict = NOT_RESOLVED  # Holm: nothing after the first comparison left unresolved is resolved
-    resolved = verdict in (AGREES, DISAGREES)
     p_t = p_f = None
     forced = False
     if c.success is not None:
@@ -624,13 +589,13 @@ def _decide_one(c: Comparison, ev: _Evidence, level: float, stopped: bool) -> tu
         if _confounded(verdict, forced, p_t, p_f):
             verdict = CONFOUNDED
     effect = abs(ev.point - c.threshold)
-    decided = Decided(
-        c.label, c.threshold, c.sign, ev.point, low, high, level, ev.p_value, verdict, c.headroom, smallest,
-        _episodes_needed(c, effect, z), _seeds_needed(ev.per_seed, effect, level), len(ev.per_seed),
+    return Decided(
+        c.label, c.threshold, c.sign, ev.point, looked.interval.low, looked.interval.high, level, ev.p_value,
+        verdict, c.headroom, smallest, episodes_needed(c.resolvable, effect, looked.z),
+        seeds_needed(ev.per_seed, effect, level), len(ev.per_seed),
         tuple(float(x) for x in percentile_interval(ev.reps, level=level)), c.contrary,
         int(np.sum(~np.isnan(c.table.rates))), p_t, p_f, forced,
     )  # fmt: skip
-    return decided, resolved
 
 
 def combine(verdicts: Sequence[str]) -> str:

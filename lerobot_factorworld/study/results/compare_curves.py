@@ -19,7 +19,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 
-from ..metrics import two_sided_z
+from ...stats.proportions import two_sided_z
 from .curve import Difference, point_difference, pooled_curve
 
 MATCHES = ("epochs", "steps")

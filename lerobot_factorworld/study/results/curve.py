@@ -15,7 +15,7 @@ from typing import Any
 from ...core import machine
 from ...core.io import atomic_write_text, read_table
 from ...protocol.conditions import TRAIN_SUITE
-from ..metrics import Z95, newcombe_independent, paired_gap, wilson_interval
+from ...stats.proportions import Z95, newcombe_independent, paired_gap, wilson_interval
 from ..plan.config import StudyConfig
 from ..plan.grid import CURVE_EPOCHS, Plan
 from ..run.inputs import whole_epochs

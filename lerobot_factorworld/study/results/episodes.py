@@ -38,8 +38,8 @@ from ...families import family_of
 from ...protocol.conditions import TRAIN_SUITE, evaluation_suites, fingerprint, shifted_factors
 from ...protocol.sampling import SamplingOptions
 from ...protocol.sidecar import DatasetCondition, read_dataset_condition
+from ...stats.proportions import wilson_interval
 from ...tasks import get_task
-from ..metrics import wilson_interval
 from ..plan.config import StudyConfig
 from ..run.inputs import EnvInputs, EvalInputs
 from ..run.steps import RESULT_FILE, Step, read_result, step_folder

@@ -19,7 +19,7 @@ from ...core.io import atomic_write_text, read_table
 from ...core.provenance import DIRTY, SHORT, SHORT_HASH, UNKNOWN
 from ...envs.stages import as_tracked, stage_names, tracked_before
 from ...protocol.conditions import TRAIN_SUITE, shifted_factors
-from ..metrics import paired_gap, wilson_interval
+from ...stats.proportions import paired_gap, wilson_interval
 from ..plan.config import RADIUS_FACTORS, StudyConfig
 from ..plan.grid import Plan, radius_of
 from ..run.blocks import SEQUENTIAL

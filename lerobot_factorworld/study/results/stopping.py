@@ -9,8 +9,9 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 from ...protocol.conditions import TRAIN_SUITE
+from ...stats.stopping import BUDGET, DECIDED, REASONS, WITHIN_TOLERANCE
 from ..plan.config import StudyConfig
-from ..sequential import BUDGET, DECIDED, PAIRED, REASONS, WITHIN_TOLERANCE, StopRule
+from ..sequential import PAIRED, StopRule
 
 
 @dataclass(frozen=True)

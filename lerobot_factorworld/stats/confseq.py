@@ -32,13 +32,15 @@ GRID_POINTS = 2001  # candidate means on [0, 1]: a bound's resolution is 1/2000 
 
 
 def candidate_grid(points: int = GRID_POINTS) -> np.ndarray:
-    """The candidate means, evenly spaced on [0, 1] (both ends included)."""
+    """The candidate means, evenly spaced on [0, 1] (both ends included; Waudby-Smith & Ramdas 2024 compute the
+    hedged capital on such a grid, section 4)."""
     return np.linspace(0.0, 1.0, points)
 
 
 @dataclass
 class BettingCS:
-    """A hedged betting confidence sequence at level ``1 - alpha`` for a batch of sequences in [0, 1].
+    """A hedged betting confidence sequence (Waudby-Smith & Ramdas 2024, section 4, eqs. 26-27) at level
+    ``1 - alpha`` for a batch of sequences in [0, 1].
 
     ``update(x)`` adds one observation per sequence (shape ``batch``); ``bounds()`` is the running interval.
     """
@@ -100,7 +102,8 @@ class BettingCS:
 
 
 def mean_cs(xs: np.ndarray, alpha: float) -> tuple[float, float]:
-    """The interval of one sequence in [0, 1] after all of ``xs``: the anytime-valid bound at its last look."""
+    """The interval of one sequence in [0, 1] after all of ``xs``: the anytime-valid bound at its last look
+    (Waudby-Smith & Ramdas 2024, hedged betting)."""
     cs = BettingCS(alpha)
     cs.extend(np.asarray(xs, dtype=float))
     low, high = cs.bounds()
@@ -109,6 +112,6 @@ def mean_cs(xs: np.ndarray, alpha: float) -> tuple[float, float]:
 
 def gap_cs(train: np.ndarray, shifted: np.ndarray, alpha: float) -> tuple[float, float]:
     """The interval of a paired gap ``train - shifted`` (outcomes in {0, 1}, per episode seed) after all of them:
-    the betting sequence of ``(d + 1) / 2`` mapped back to [-1, 1]."""
+    the betting sequence (Waudby-Smith & Ramdas 2024) of ``(d + 1) / 2`` mapped back to [-1, 1]."""
     low, high = mean_cs((np.asarray(train, float) - np.asarray(shifted, float) + 1.0) / 2.0, alpha)
     return 2.0 * low - 1.0, 2.0 * high - 1.0
