@@ -547,14 +547,14 @@ class PackConfig:
         if not self.study or not self.out:
             raise ValueError("factorworld pack needs --study=STUDY_DIR --out=PACK_DIR")
         check_folder_target(self.out, "out")
-        # the pack's module reads step folders by steps.py's names, which imports the dataset stack (~3 s)
+        # the pack's module imports MetaWorld's task registry (through run/blocks.py: about a second)
         from .study.run.pack import check_pack_target  # noqa: PLC0415
 
         check_pack_target(Path(self.study), Path(self.out))
 
 
 def cmd_pack(args: list[str]) -> None:
-    # as in PackConfig: steps.py's dataset stack, only when this command runs
+    # as in PackConfig: the pack's imports, only when this command runs
     from .study.run.pack import pack  # noqa: PLC0415
 
     cfg = parse_config(PackConfig, args, "pack")
@@ -591,7 +591,7 @@ class UnpackConfig:
     def __post_init__(self) -> None:
         if not self.pack:
             raise ValueError("factorworld unpack needs --pack=PACK_DIR (and --study=STUDY_DIR)")
-        # as in PackConfig: steps.py's dataset stack, only when this command runs
+        # as in PackConfig: the pack's imports, only when this command runs
         from .study.run.pack import read_manifest  # noqa: PLC0415
 
         self.study = self.study or read_manifest(self.pack)["study"]
@@ -599,7 +599,7 @@ class UnpackConfig:
 
 
 def cmd_unpack(args: list[str]) -> None:
-    # as in cmd_pack: the pack's module imports steps.py's dataset stack
+    # as in cmd_pack: the pack's imports, only when this command runs
     from .study.run.pack import unpack  # noqa: PLC0415
 
     cfg = parse_config(UnpackConfig, args, "unpack")

@@ -70,7 +70,7 @@ def run_way(way: str, grid: dict, folder: Path) -> float:
     return seconds
 
 
-# How a checkpoint's data was loaded (``steps.loader_args``: in process, or by a lent worker), which its
+# How a checkpoint's data was loaded (``train_step.loader_args``: in process, or by a lent worker), which its
 # ``train_config.json`` records: the weights and processors are the same either way, byte for byte.
 LOADER_FIELDS = ("num_workers", "persistent_workers", "dataloader_multiprocessing_context", "prefetch_factor")
 

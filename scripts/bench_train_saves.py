@@ -20,8 +20,9 @@ from pathlib import Path
 from lerobot_factorworld.core.settings import parse_config
 from lerobot_factorworld.study.plan.command import StudyCommand
 from lerobot_factorworld.study.plan.grid import make_plan
+from lerobot_factorworld.study.run.result import read_result
 from lerobot_factorworld.study.run.step import RUN, Step
-from lerobot_factorworld.study.run.steps import read_result, run_step
+from lerobot_factorworld.study.run.worker import run_step
 
 POLICIES = {"bc": "{type: bc}", "rt1": "{type: rt1, preset: small, speed: fast}"}
 CONFIG = """

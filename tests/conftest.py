@@ -31,7 +31,7 @@ from filelock import FileLock  # noqa: E402
 
 from lerobot_factorworld.core.memory import keep_freed_memory  # noqa: E402
 from lerobot_factorworld.envs.factor_env import FactorWorldEnv  # noqa: E402
-from lerobot_factorworld.study.run.steps import as_lerobot_process  # noqa: E402
+from lerobot_factorworld.study.run.lerobot_process import as_lerobot_process  # noqa: E402
 
 THREAD_VARIABLES = ("OMP_NUM_THREADS", "MKL_NUM_THREADS", "LP_NUM_THREADS")  # torch/oneDNN, MKL, Mesa's llvmpipe
 
@@ -114,7 +114,7 @@ def run_main():
 
 def _run_lerobot(command: str, *args: str, check: bool = True) -> subprocess.CompletedProcess:
     """``lerobot-train`` or ``lerobot-eval`` with ``args``: their console script's ``main()`` run in this worker
-    process as a study's grouped execution trains (``study/run/steps.py: as_lerobot_process``); with ``check``,
+    process as a study's grouped execution trains (``study/run/lerobot_process.py: as_lerobot_process``); with ``check``,
     asserts it succeeded. The same code as the console script without the ~7 s of imports a new process pays;
     the console scripts themselves, found on the PATH with the ``factorworld`` env discovered as a plugin by a
     fresh process, run as processes in the LeRobot round trip (tests/test_lerobot_metaworld_obs.py: both)."""

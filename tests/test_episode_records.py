@@ -50,9 +50,13 @@ from lerobot_factorworld.study.results.rows import (
     finished_evaluations,
     read_results,
 )
-from lerobot_factorworld.study.run import steps
+from lerobot_factorworld.study.run.collect_step import collect_config
+from lerobot_factorworld.study.run.eval_env import eval_env_config
 from lerobot_factorworld.study.run.executors import InlineExecutor
 from lerobot_factorworld.study.run.inputs import CollectInputs, EvalInputs
+from lerobot_factorworld.study.run.result import DATA_DIR, INPUTS_FILE, read_result
+from lerobot_factorworld.study.run.step import Step
+from lerobot_factorworld.study.run.worker import RUNNERS
 
 SETTINGS = {
     "name": "records",
@@ -70,12 +74,12 @@ REPO = "someone/factorworld_records"
 DATASETS = "https://huggingface.co/datasets/"  # what HfApi.create_repo answers: a repo URL
 
 
-def _fake_collect(step: steps.Step, folder: Path, deps: list[Path]) -> dict:
+def _fake_collect(step: Step, folder: Path, deps: list[Path]) -> dict:
     """The side-car of the dataset ``factorworld collect`` would make (its settings and environments), no demos."""
     from lerobot_factorworld.datasets.collect import plan_jobs
 
-    root = folder / steps.DATA_DIR
-    cfg = steps.collect_config(CollectInputs.from_dict(step.inputs), root, step.key)
+    root = folder / DATA_DIR
+    cfg = collect_config(CollectInputs.from_dict(step.inputs), root, step.key)
     sidecar = {
         "settings": cfg.fingerprint(),
         "history": [],
@@ -87,12 +91,12 @@ def _fake_collect(step: steps.Step, folder: Path, deps: list[Path]) -> dict:
     return {"root": str(root), "repo_id": cfg.repo_id, "episodes": 2, "frames": 2, "failures": {}}
 
 
-def _fake_eval(step: steps.Step, folder: Path, deps: list[Path]) -> dict:
-    """The environments as ``_run_eval`` builds them (its env config), made-up outcomes: the first k succeed."""
+def _fake_eval(step: Step, folder: Path, deps: list[Path]) -> dict:
+    """The environments as ``run_eval`` builds them (its env config), made-up outcomes: the first k succeed."""
     collect = next(d for d in deps if d.parent.name == "collect")
     inputs = EvalInputs.from_dict(step.inputs)
-    collect_inputs = CollectInputs.from_dict(json.loads((collect / steps.INPUTS_FILE).read_text())["inputs"])
-    env_cfg = steps.eval_env_config(collect_inputs, steps.read_result(collect)["root"], inputs)
+    collect_inputs = CollectInputs.from_dict(json.loads((collect / INPUTS_FILE).read_text())["inputs"])
+    env_cfg = eval_env_config(collect_inputs, read_result(collect)["root"], inputs)
     configs = env_cfg.suites(env_cfg.task_names[0])[inputs.condition]
     k = SUCCESSES[inputs.condition]
     successes = [i < k for i in range(inputs.episodes)]
@@ -111,13 +115,13 @@ def _fake_eval(step: steps.Step, folder: Path, deps: list[Path]) -> dict:
     }
 
 
-def _fake_train(step: steps.Step, folder: Path, deps: list[Path]) -> dict:
+def _fake_train(step: Step, folder: Path, deps: list[Path]) -> dict:
     return {"checkpoint": str(folder / "train"), "steps": 1}
 
 
 def _fake_steps(mp: pytest.MonkeyPatch) -> None:
     for kind, fake in (("collect", _fake_collect), ("train", _fake_train), ("eval", _fake_eval)):
-        mp.setitem(steps.RUNNERS, kind, fake)
+        mp.setitem(RUNNERS, kind, fake)
     mp.setattr(runner, "make_executor", lambda kind, study_dir, *a: InlineExecutor(study_dir, a[-1]))
 
 
@@ -157,7 +161,7 @@ def test_one_row_per_episode_with_its_environment_outcome_and_code(study):
     assert len(rows) == sum(c["episodes"] for c in cells) == 8 * 4
     by_step = {c["step"]: c for c in cells}
     for step in make_plan(cfg).of_kind("eval"):
-        result = steps.read_result(step, cfg.out_dir)
+        result = read_result(step, cfg.out_dir)
         mine = [r for r in rows if r["step"] == step.key]
         cell = by_step[step.key]
         assert [r["episode_ix"] for r in mine] == [0, 1, 2, 3]
@@ -230,7 +234,7 @@ def test_environments_are_never_guessed(study, tmp_path):
     cfg, _ = _copy(study, tmp_path)
     copied = [e for e in _evaluations(cfg) if e.labels["condition"] == "light"]
     collect = next(s for s in make_plan(cfg).of_kind("collect") if s.key in copied[0].step.deps)
-    shutil.rmtree(collect.folder(cfg.out_dir) / steps.DATA_DIR)  # datasets deleted to save space
+    shutil.rmtree(collect.folder(cfg.out_dir) / DATA_DIR)  # datasets deleted to save space
     rows = list(episodes.episode_rows(cfg, copied, cfg.out_dir))
     assert rows[0]["factors"] is None and rows[0]["env_id"] is None and rows[0]["env_index"] == 1000 % 2
     assert [r["success"] for r in rows[:4]] == [True, True, False, False]
@@ -305,7 +309,7 @@ def test_push_settings_are_checked_in_one_line_before_any_work(tmp_path, monkeyp
     assert not cfg.push_to_hub
     cfg, _ = _config(tmp_path, push_to_hub=True, hub_repo_id=REPO)
     ran = []
-    monkeypatch.setitem(steps.RUNNERS, "collect", lambda *a: ran.append(a))
+    monkeypatch.setitem(RUNNERS, "collect", lambda *a: ran.append(a))
     monkeypatch.setattr(huggingface_hub, "get_token", lambda: None)  # not logged in
     with pytest.raises(ValueError, match="push_to_hub=true needs a Hugging Face token with write access"):
         runner.run_study(*cfg.parts(), command="no token")

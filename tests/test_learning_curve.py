@@ -32,7 +32,7 @@ from lerobot_factorworld.study.results.curve import (
 from lerobot_factorworld.study.results.merge import merge_curve_rows
 from lerobot_factorworld.study.results.rows import parse_stage_counts
 from lerobot_factorworld.study.run.inputs import EvalInputs, TrainInputs
-from lerobot_factorworld.study.run.steps import curve_saves
+from lerobot_factorworld.study.run.train_schedule import curve_saves
 
 
 def _command(tmp_path: Path, every: float = 1) -> StudyCommand:

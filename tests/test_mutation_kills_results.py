@@ -22,7 +22,7 @@ from lerobot_factorworld.study.results.rows import (
     stage_counts_text,
     write_results,
 )
-from lerobot_factorworld.study.run import steps
+from lerobot_factorworld.study.run.step import Step
 
 TRAIN = [True, True, True, False, True, True, False, True]  # 6 of 8
 SHIFTED = [True, False, False, False, True, False, True, False]  # 3 of 8: 4 train-only, 1 shifted-only
@@ -31,7 +31,7 @@ SEEDS = list(range(1000, 1008))
 
 def _eval(method: str, checkpoint: str, condition: str, successes: list[bool], widths: str = "default", **result):
     meta = {"method": method, "task": "door-open", "n_train_envs": 2, "seed": 0, "widths": widths}
-    step = steps.Step(
+    step = Step(
         "eval", {"condition": condition, "checkpoint": checkpoint}, (checkpoint,), {**meta, "condition": condition}
     )
     outcome = {"successes": successes, "seeds": SEEDS[: len(successes)], "n_envs": 4, "envs_visited": 4}

@@ -18,8 +18,9 @@ from lerobot_factorworld.core.provenance import Provenance
 from lerobot_factorworld.study.plan import stale
 from lerobot_factorworld.study.plan.config import EvalSettings, MethodConfig, StudyConfig
 from lerobot_factorworld.study.plan.grid import Plan, make_plan
-from lerobot_factorworld.study.run import steps
 from lerobot_factorworld.study.run.options import RunOptions
+from lerobot_factorworld.study.run.result import PROVENANCE, RESULT_FILE, is_done, read_result
+from lerobot_factorworld.study.run.step import Step
 
 OTHER = "826fe542cafcf25ef4dd4d5f7e92595c9abe6388"
 NOW = Provenance("a" * 40, True, "1" * 64)
@@ -46,11 +47,11 @@ def study(tmp_path, monkeypatch) -> tuple[StudyConfig, Plan, Path]:
     return cfg, plan, tmp_path / "study"
 
 
-def _made_by(step: steps.Step, study_dir: Path, made: Provenance | None) -> None:
+def _made_by(step: Step, study_dir: Path, made: Provenance | None) -> None:
     folder = step.folder(study_dir)
     folder.mkdir(parents=True, exist_ok=True)
-    result = {steps.PROVENANCE: made.to_dict()} if made else {}
-    (folder / steps.RESULT_FILE).write_text(json.dumps(result))
+    result = {PROVENANCE: made.to_dict()} if made else {}
+    (folder / RESULT_FILE).write_text(json.dumps(result))
 
 
 def test_exactly_stale_labels_steps_are_all_named_with_no_more(study):
@@ -117,7 +118,7 @@ def test_rerun_stale_sets_dependents_aside_first_under_the_commit_that_made_each
         f"{train.key}.stale-aaaaaaa",
         f"{collect.key}.stale-826fe54",
     ]
-    assert all(p.is_dir() and not steps.is_done(s, study_dir) for p, s in zip(moved, plan.steps[::-1]))
+    assert all(p.is_dir() and not is_done(s, study_dir) for p, s in zip(moved, plan.steps[::-1]))
 
 
 def test_the_warning_reaches_a_block_buffered_stderr_at_once(study, monkeypatch):
@@ -142,9 +143,9 @@ def test_rerun_stale_takes_a_stale_steps_commit_from_the_list_without_reading_it
     assert found == [stale.Stale(collect, OLD)]
     read = []
 
-    def spy(step: steps.Step, folder: Path) -> dict:
+    def spy(step: Step, folder: Path) -> dict:
         read.append(step.key)
-        return steps.read_result(step, folder)
+        return read_result(step, folder)
 
     monkeypatch.setattr(stale, "read_result", spy)
     moved = stale.rerun_stale(plan, study_dir, found)

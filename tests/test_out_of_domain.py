@@ -10,7 +10,7 @@ from lerobot_factorworld.study.plan.config import MethodConfig, StudyConfig, Tra
 from lerobot_factorworld.study.plan.cost import load_model, step_cost
 from lerobot_factorworld.study.plan.grid import make_plan
 from lerobot_factorworld.study.run.inputs import TrainInputs
-from lerobot_factorworld.study.run.steps import epoch_frames, train_steps
+from lerobot_factorworld.study.run.train_schedule import epoch_frames, train_steps
 from lerobot_factorworld.tasks import get_task
 
 BC = {"name": "bc", "policy": {"type": "bc"}}

@@ -59,7 +59,7 @@ def test_profile_writes_a_studys_outputs_without_collecting_or_training(bc_check
     # the same command again: every evaluation cached, the same results
     cfg = _profile_config(bc_checkpoint, out).study()
     from lerobot_factorworld.study.plan.grid import make_plan
-    from lerobot_factorworld.study.run.steps import is_done
+    from lerobot_factorworld.study.run.result import is_done
 
     assert all(is_done(step, out) for step in make_plan(cfg).steps)
 

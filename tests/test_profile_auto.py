@@ -56,7 +56,7 @@ def test_auto_is_refused_where_claims_need_fixed_n_intervals(factorworld_checkpo
 def test_an_auto_profile_stops_each_condition_keeps_every_episode_and_says_why(factorworld_checkpoint, tmp_path):
     from lerobot_factorworld.study.plan.grid import make_plan
     from lerobot_factorworld.study.results.episodes import read_episodes
-    from lerobot_factorworld.study.run.steps import is_done, read_result
+    from lerobot_factorworld.study.run.result import is_done, read_result
     from lerobot_factorworld.study.runner import run_study
 
     out = tmp_path / "auto"

@@ -24,9 +24,17 @@ from lerobot_factorworld.study.plan.config import StudyConfig
 from lerobot_factorworld.study.plan.grid import Plan, make_plan
 from lerobot_factorworld.study.report.write import load_config
 from lerobot_factorworld.study.results.rows import RESULT_COLUMNS, Evaluation, commits_of, csv_text, result_rows
-from lerobot_factorworld.study.run import steps
 from lerobot_factorworld.study.run.executors import InlineExecutor
-from lerobot_factorworld.study.run.step import RUN_CONFIG_FILE
+from lerobot_factorworld.study.run.result import (
+    INPUTS_FILE,
+    MACHINE,
+    PROVENANCE,
+    RESULT_FILE,
+    provenance_of,
+    read_result,
+)
+from lerobot_factorworld.study.run.step import KINDS, RUN_CONFIG_FILE, Step
+from lerobot_factorworld.study.run.worker import RUNNERS, run_step
 
 GIT = shutil.which("git")
 DOCS_RESULTS = Path(__file__).resolve().parents[1] / "docs" / "results"
@@ -127,7 +135,7 @@ def test_this_checkout_is_named_by_its_head_and_its_source():
 # --- steps record it, keys do not hold it ---------------------------------------------------------------
 
 
-def _fake_result(step: steps.Step, folder: Path) -> dict:
+def _fake_result(step: Step, folder: Path) -> dict:
     if step.kind == "collect":
         (folder / "data").mkdir()
         (folder / "data" / "marker").write_text(step.key)
@@ -147,16 +155,16 @@ def _fake_result(step: steps.Step, folder: Path) -> dict:
 
 
 @pytest.fixture
-def ran(monkeypatch) -> list[steps.Step]:
+def ran(monkeypatch) -> list[Step]:
     """The steps the fake runners ran, in order; every study of the test runs in this process."""
-    out: list[steps.Step] = []
+    out: list[Step] = []
 
     def fake(step, folder, deps):
         out.append(step)
         return _fake_result(step, folder)
 
-    for kind in steps.KINDS:
-        monkeypatch.setitem(steps.RUNNERS, kind, fake)
+    for kind in KINDS:
+        monkeypatch.setitem(RUNNERS, kind, fake)
     monkeypatch.setattr(runner, "make_executor", lambda kind, study_dir, *a: InlineExecutor(study_dir, a[-1]))
     monkeypatch.setattr(runner, "write_report", lambda *a: (None, None, []))  # report/write.py: tested elsewhere
     return out
@@ -172,18 +180,18 @@ def test_a_step_records_its_provenance_and_its_key_does_not_hold_it(tmp_path, ra
     cfg, _ = _study(tmp_path)
     plan = make_plan(cfg)
     collect = plan.of_kind("collect")[0]
-    steps.run_step(collect.to_dict(), cfg.out_dir)
-    stored = json.loads((collect.folder(cfg.out_dir) / steps.RESULT_FILE).read_text())
-    assert stored[steps.PROVENANCE] == provenance.current().to_dict()
-    assert steps.provenance_of(stored) == provenance.current()
-    assert stored[steps.MACHINE] == machine.current() and stored[steps.MACHINE]["cpus"] == len(os.sched_getaffinity(0))
-    inputs_text = (collect.folder(cfg.out_dir) / steps.INPUTS_FILE).read_text()
-    assert "provenance" not in inputs_text and steps.MACHINE not in inputs_text
+    run_step(collect.to_dict(), cfg.out_dir)
+    stored = json.loads((collect.folder(cfg.out_dir) / RESULT_FILE).read_text())
+    assert stored[PROVENANCE] == provenance.current().to_dict()
+    assert provenance_of(stored) == provenance.current()
+    assert stored[MACHINE] == machine.current() and stored[MACHINE]["cpus"] == len(os.sched_getaffinity(0))
+    inputs_text = (collect.folder(cfg.out_dir) / INPUTS_FILE).read_text()
+    assert "provenance" not in inputs_text and MACHINE not in inputs_text
     monkeypatch.setattr(provenance, "current", lambda: Provenance(OTHER, False, OTHER_HASH))
     assert [s.key for s in make_plan(cfg).steps] == [s.key for s in plan.steps]  # other code: the same keys
     train = plan.of_kind("train")[0]
-    steps.run_step(train.to_dict(), cfg.out_dir)
-    assert steps.read_result(train, cfg.out_dir)[steps.PROVENANCE] == {
+    run_step(train.to_dict(), cfg.out_dir)
+    assert read_result(train, cfg.out_dir)[PROVENANCE] == {
         "commit": OTHER,
         "clean": False,
         "source_hash": OTHER_HASH,
@@ -199,7 +207,7 @@ def test_results_rows_carry_the_commit_and_commits_of_names_the_commits(tmp_path
         None,  # made before provenance was recorded
     ]
     evaluations = [
-        Evaluation(step, {**_fake_result(step, tmp_path), **({steps.PROVENANCE: p} if p else {})})
+        Evaluation(step, {**_fake_result(step, tmp_path), **({PROVENANCE: p} if p else {})})
         for step, p in zip(evals, made)
     ]
     rows = result_rows(cfg, evaluations)
@@ -225,17 +233,17 @@ def test_results_rows_carry_the_commit_and_commits_of_names_the_commits(tmp_path
 # --- the runner: cached steps made by other code ----------------------------------------------------------
 
 
-def _made_by(step: steps.Step, study_dir: str, made: Provenance | None) -> None:
+def _made_by(step: Step, study_dir: str, made: Provenance | None) -> None:
     """Rewrite a cached step's recorded provenance (``None``: a result from before it was recorded)."""
-    path = step.folder(study_dir) / steps.RESULT_FILE
+    path = step.folder(study_dir) / RESULT_FILE
     result = json.loads(path.read_text())
-    result.pop(steps.PROVENANCE)
+    result.pop(PROVENANCE)
     if made is not None:
-        result[steps.PROVENANCE] = made.to_dict()
+        result[PROVENANCE] = made.to_dict()
     path.write_text(json.dumps(result))
 
 
-def _collect_n1(plan: Plan) -> steps.Step:
+def _collect_n1(plan: Plan) -> Step:
     return next(s for s in plan.of_kind("collect") if s.meta["n_train_envs"] == 1)
 
 
@@ -337,10 +345,10 @@ def test_rerun_stale_redoes_the_step_and_its_dependents_and_keeps_the_old_folder
     now = provenance.current()
     old = collect.folder(cfg.out_dir).with_name(f"{collect.key}.stale-826fe54")
     assert old in outcome.set_aside and len(outcome.set_aside) == 5
-    assert steps.provenance_of(json.loads((old / steps.RESULT_FILE).read_text())).commit == OTHER
+    assert provenance_of(json.loads((old / RESULT_FILE).read_text())).commit == OTHER
     assert (old / "data" / "marker").read_text() == collect.key  # the old dataset is kept
     for step in [collect, *dependents]:
-        assert steps.provenance_of(steps.read_result(step, cfg.out_dir)) == now
+        assert provenance_of(read_result(step, cfg.out_dir)) == now
     for step in dependents:  # made by the current code from the old dataset: kept under their own commit
         assert step.folder(cfg.out_dir).with_name(f"{step.key}.stale-{now.revision(short=True)}").is_dir()
     ran.clear()
@@ -371,7 +379,7 @@ def test_rerun_stale_redoes_dependents_of_dependents(tmp_path, ran, capsys):
     assert outcome.ran == {"collect": 1, "train": 1, "eval": 3} and len(outcome.set_aside) == 5
     assert "they and the 4 cached step(s) depending on them are redone" in _warnings(capsys.readouterr().err)[0]
     now = provenance.current()
-    assert all(steps.provenance_of(steps.read_result(s, cfg.out_dir)) == now for s in plan.steps)
+    assert all(provenance_of(read_result(s, cfg.out_dir)) == now for s in plan.steps)
     kept = own.folder(cfg.out_dir)  # the task's own dataset is not redone
     assert kept.is_dir() and not kept.with_name(f"{own.key}.stale-826fe54").exists()
 
@@ -391,7 +399,7 @@ def test_a_dirty_tree_is_named_when_steps_run_and_recorded(finished, ran, capsys
     runner.run_study(*cfg.parts(), command="nothing to run")
     assert _warnings(capsys.readouterr().err) == []  # nothing runs: nothing to warn about
     step = plan.of_kind("eval")[0]
-    (step.folder(cfg.out_dir) / steps.RESULT_FILE).unlink()
+    (step.folder(cfg.out_dir) / RESULT_FILE).unlink()
     runner.run_study(*cfg.parts(), command="one to run")
     (line,) = _warnings(capsys.readouterr().err)
     assert line == (
@@ -399,7 +407,7 @@ def test_a_dirty_tree_is_named_when_steps_run_and_recorded(finished, ran, capsys
         "steps run now are not reproducible from a commit"
     )
     assert [s.key for s in ran] == [step.key]
-    assert steps.read_result(step, cfg.out_dir)[steps.PROVENANCE]["clean"] is False
+    assert read_result(step, cfg.out_dir)[PROVENANCE]["clean"] is False
 
 
 def test_strict_and_rerun_stale_together_are_refused(tmp_path):

@@ -183,8 +183,9 @@ def _study(**collect):
 
 def test_the_study_passes_the_share_to_collection_and_so_to_evaluation(tmp_path):
     from lerobot_factorworld.study.plan.grid import make_plan
+    from lerobot_factorworld.study.run.collect_step import collect_config
+    from lerobot_factorworld.study.run.eval_env import eval_env_config
     from lerobot_factorworld.study.run.inputs import CollectInputs, EvalInputs
-    from lerobot_factorworld.study.run.steps import collect_config, eval_env_config
 
     plan = make_plan(_study(rgb_fraction=0.25))
     collect = plan.of_kind("collect")[0]

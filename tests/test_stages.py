@@ -36,8 +36,9 @@ from lerobot_factorworld.study.results.rows import (
     result_rows,
     stage_counts_text,
 )
+from lerobot_factorworld.study.run.eval_step import of_seeds
 from lerobot_factorworld.study.run.recording import EpisodeRecorder
-from lerobot_factorworld.study.run.steps import Step, of_seeds
+from lerobot_factorworld.study.run.step import Step
 
 DATA = Path(__file__).resolve().parent / "data" / "results"
 OBJECT = ("none", "reached", "grasped", "moved", "succeeded")

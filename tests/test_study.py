@@ -60,7 +60,7 @@ def test_results_rows_hold_the_signed_gap_of_each_checkpoints_own_paired_episode
     from types import SimpleNamespace
 
     from lerobot_factorworld.study.results.rows import Evaluation, read_results, result_rows, write_results
-    from lerobot_factorworld.study.run.steps import Step
+    from lerobot_factorworld.study.run.step import Step
 
     cfg = SimpleNamespace(name="s", methods=[SimpleNamespace(name="bc", policy={"type": "bc"})])
     seeds = list(range(1000, 1010))
@@ -627,7 +627,7 @@ def test_dataset_gives_the_training_condition_and_mismatches_are_refused(toy, tm
     from lerobot_factorworld.protocol.sampling import sample_configs
     from lerobot_factorworld.protocol.sidecar import SIDECAR
     from lerobot_factorworld.study.plan.grid import make_plan
-    from lerobot_factorworld.study.run.steps import read_result
+    from lerobot_factorworld.study.run.result import read_result
 
     cfg, _ = toy
     collect = next(s for s in make_plan(cfg).of_kind("collect") if s.inputs["n_envs"] == 2)
@@ -673,7 +673,7 @@ def test_a_plan_on_a_local_ray_instance_gives_the_same_results(toy, tmp_path):
     import csv
 
     from lerobot_factorworld.study.plan.grid import make_plan
-    from lerobot_factorworld.study.run.steps import read_result
+    from lerobot_factorworld.study.run.result import read_result
     from lerobot_factorworld.study.runner import run_study
 
     cfg, local = toy
@@ -782,7 +782,7 @@ def test_a_study_collects_and_evaluates_at_the_quality_it_names(toy, tmp_path, m
     from lerobot_factorworld.study import runner
     from lerobot_factorworld.study.plan.grid import make_plan
     from lerobot_factorworld.study.run.executors import InlineExecutor
-    from lerobot_factorworld.study.run.steps import read_result
+    from lerobot_factorworld.study.run.result import read_result
 
     cfg, _ = toy
     assert all("quality" not in s.inputs for s in make_plan(cfg).of_kind("collect"))
@@ -919,7 +919,7 @@ def test_study_datasets_store_lossless_frames_by_default():
     13-pixel object's colour in training while evaluation sees raw renders."""
     from lerobot_factorworld.study.plan.config import StudyConfig
     from lerobot_factorworld.study.plan.grid import make_plan
-    from lerobot_factorworld.study.run.steps import collect_config
+    from lerobot_factorworld.study.run.collect_step import collect_config
 
     for cfg in (StudyConfig(), *(_config(name) for name in STUDY_CONFIGS)):
         for step in make_plan(cfg).of_kind("collect"):

@@ -232,26 +232,25 @@ def test_duplicate_method_names_and_duplicate_policy_settings_are_refused():
 
 
 def test_results_name_paths_relative_to_the_study_folder_and_a_moved_study_still_reads_them(tmp_path, monkeypatch):
-    from lerobot_factorworld.study.run import steps
+    from lerobot_factorworld.study.run.result import read_result
+    from lerobot_factorworld.study.run.worker import RUNNERS, run_step
 
     def fake_collect(step, folder, deps):
         (folder / "data").mkdir()
         return {"root": str(folder / "data"), "repo_id": "x", "episodes": 1, "frames": 1, "failures": {}}
 
-    monkeypatch.setitem(steps.RUNNERS, "collect", fake_collect)
+    monkeypatch.setitem(RUNNERS, "collect", fake_collect)
     cfg = _cfg(out_dir=str(tmp_path / "a"))
     step = make_plan(cfg).of_kind("collect")[0]
-    steps.run_step(step.to_dict(), str(tmp_path / "a"))
+    run_step(step.to_dict(), str(tmp_path / "a"))
     stored = json.loads((step.folder(tmp_path / "a") / "result.json").read_text())
     assert stored["root"] == f"steps/collect/{step.key}/data"
     shutil.move(tmp_path / "a", tmp_path / "b")
-    assert steps.read_result(step, tmp_path / "b")["root"] == str(
-        tmp_path / "b" / "steps" / "collect" / step.key / "data"
-    )
+    assert read_result(step, tmp_path / "b")["root"] == str(tmp_path / "b" / "steps" / "collect" / step.key / "data")
     # a result of the first format (absolute paths) in a folder that has moved since
     stored["root"] = str(tmp_path / "a" / "steps" / "collect" / step.key / "data")
     (step.folder(tmp_path / "b") / "result.json").write_text(json.dumps(stored))
-    assert steps.read_result(step.folder(tmp_path / "b"))["root"] == str(step.folder(tmp_path / "b") / "data")
+    assert read_result(step.folder(tmp_path / "b"))["root"] == str(step.folder(tmp_path / "b") / "data")
 
 
 # --- 7. the pick family's language conditions ---------------------------------------------------
@@ -259,7 +258,7 @@ def test_results_name_paths_relative_to_the_study_folder_and_a_moved_study_still
 
 def test_pick_language_conditions_and_n_objects_in_a_study():
     from lerobot_factorworld.pick.family import PICK_FAMILY
-    from lerobot_factorworld.study.run.steps import collect_config
+    from lerobot_factorworld.study.run.collect_step import collect_config
 
     factors = ["light", "table_texture", "held_out_phrasings", "held_out_objects"]
     cfg = _cfg(tasks=["pick"], n_train_envs=[2], factors=factors, pairs=["all"], collect={"demos": 2, "n_objects": 3})
@@ -326,8 +325,8 @@ def test_reused_steps_are_linked_by_key_and_a_dangling_link_is_relinked_or_dropp
     """study/run/reuse.py without running a step: a finished step (its result.json) of another folder is linked
     (relatively: both folders may move together); an unfinished one is not; when that folder moves alone, the
     dangling link is replaced from the new place, or removed so that the step runs here."""
+    from lerobot_factorworld.study.run.result import is_done
     from lerobot_factorworld.study.run.reuse import link_reused_steps, reusable_steps
-    from lerobot_factorworld.study.run.steps import is_done
 
     other, here = tmp_path / "other", tmp_path / "here"
     cfg = _cfg(out_dir=str(here))

@@ -13,7 +13,7 @@ import torch
 
 from lerobot_factorworld.cli import main
 from lerobot_factorworld.study.plan.config import StudyConfig
-from lerobot_factorworld.study.run.steps import device_problem, require_device
+from lerobot_factorworld.study.run.device import device_problem, require_device
 
 NO_CUDA = pytest.mark.skipif(torch.cuda.is_available(), reason="checks the refusal on a machine without CUDA")
 METHODS = [

@@ -20,8 +20,9 @@ from lerobot_factorworld.core.timing import Timings
 from lerobot_factorworld.study.plan.config import StudyConfig
 from lerobot_factorworld.study.plan.grid import make_plan
 from lerobot_factorworld.study.run.executors import can_fork, lend_idle_workers, task_units
+from lerobot_factorworld.study.run.lerobot_process import as_lerobot_process
 from lerobot_factorworld.study.run.options import RunOptions
-from lerobot_factorworld.study.run.steps import as_lerobot_process, loader_args, stores_video
+from lerobot_factorworld.study.run.train_step import loader_args, stores_video
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -165,7 +166,7 @@ def test_a_process_with_another_thread_is_not_forked():
 
 def test_profile_and_cost_fit_read_the_steps_timings(tmp_path, monkeypatch):
     from lerobot_factorworld.study.plan import cost, profile
-    from lerobot_factorworld.study.run.steps import RESULT_FILE
+    from lerobot_factorworld.study.run.result import RESULT_FILE
 
     cfg = _cfg(tmp_path)
     plan = make_plan(cfg)

@@ -201,8 +201,8 @@ def test_a_ray_worker_lost_mid_training_is_retried_and_resumes_to_the_uninterrup
 def test_a_worker_killed_by_a_native_fault_prints_the_python_stack_first():
     """What a Ray worker's ``.err`` log holds when MuJoCo or Mesa crashes it: the stack, not just a lost worker."""
     crash = (
-        "import ctypes, lerobot_factorworld.study.run.steps as steps\n"
-        "steps.run_steps([], '.')  # a Ray worker runs its task\n"
+        "import ctypes, lerobot_factorworld.study.run.worker as worker\n"
+        "worker.run_steps([], '.')  # a Ray worker runs its task\n"
         "def render_the_scene():\n"
         "    ctypes.string_at(0)\n"
         "render_the_scene()\n"

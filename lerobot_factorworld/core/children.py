@@ -1,7 +1,7 @@
 """Processes forked from a study's worker die with it.
 
 A training run in a persistent worker (a Ray task's process, a grouped local worker) forks its data loaders
-(``study/run/steps.py``, ``loader_args``). A forked child holds copies of every file descriptor of its parent,
+(``study/run/train_step.py``, ``loader_args``). A forked child holds copies of every file descriptor of its parent,
 a Ray worker's connection to its raylet included. When the worker is killed (the OOM killer, kill -9) while a
 loader child lives, the raylet can keep seeing an open connection, and so neither declare the worker lost nor retry
 its task, until that child ends (a retry once came 7 minutes late in the test suite; that an orphaned loader held it

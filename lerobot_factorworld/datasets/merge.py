@@ -54,7 +54,7 @@ def write_stats_in_feature_order(root: Path) -> None:
     """Rewrite ``meta/stats.json`` with its features in ``info.json``'s order. LeRobot 0.6.1 aggregates the stats
     over a set of feature names, so their order in the file follows Python's per-process string hashing: two
     collections of the same demos would differ in that file's bytes (never in its numbers), and so would the
-    dataset's content hash that a training's record of its runs compares (``study/run/steps.py``). Every dataset
+    dataset's content hash that a training's record of its runs compares (``study/run/train_step.py``). Every dataset
     this package aggregates (a collection's shards, a training's merged data) goes through it."""
     path = root / "meta" / "stats.json"
     stats = json.loads(path.read_text(encoding="utf-8"))

@@ -35,9 +35,9 @@ from .run.blocks import group_id, is_sequential
 from .run.checkpoint import check_checkpoints, fetch_checkpoints
 from .run.executors import make_executor, task_units
 from .run.options import RunOptions
+from .run.result import is_done
 from .run.reuse import check_reuse_from, link_reused_steps
-from .run.step import RUN_CONFIG_FILE
-from .run.steps import KINDS, Step, is_done
+from .run.step import KINDS, RUN_CONFIG_FILE, Step
 
 LOCK_FILE = ".lock"
 REPORT_LOCK_FILE = ".report.lock"  # one writer of the study's outputs at a time: a run's end or a --report-only

@@ -40,8 +40,10 @@ from ..run.checkpoint import GIVEN_CHECKPOINT, checkpoint_problems, local_folder
 from ..run.executors import task_units
 from ..run.inputs import CollectInputs, EnvInputs, EvalInputs, TrainInputs
 from ..run.options import RunOptions
+from ..run.result import TIMINGS, is_done
 from ..run.reuse import reusable_steps
-from ..run.steps import KINDS, TIMINGS, Step, epoch_frames, evaluated, is_done
+from ..run.step import KINDS, Step, evaluated
+from ..run.train_schedule import epoch_frames
 from .config import StudyConfig
 from .grid import Plan
 from .power import power_lines

@@ -2,7 +2,7 @@
 one evaluation per condition of each checkpoint.
 
 What goes into a step's inputs (hence its key) is what changes its results (``inputs.py``; see
-``steps.py``). The ``--dry-run`` cost model is in ``cost.py``."""
+``step.py``). The ``--dry-run`` cost model is in ``cost.py``."""
 
 from __future__ import annotations
 
@@ -18,8 +18,7 @@ from ..run.blocks import with_stop_rule
 from ..run.checkpoint import GIVEN_CHECKPOINT, keyed_checkpoint
 from ..run.inputs import OWN_FRAMES, CollectInputs, EnvInputs, EvalInputs, TrainInputs
 from ..run.recording import RECORD_SETTING
-from ..run.step import RUN, Step
-from ..run.steps import versions
+from ..run.step import RUN, Step, versions
 from .config import RADII_M, MethodConfig, StudyConfig, TrainSettings, map_arg_paths, map_policy_paths
 
 DEFAULT_WIDTHS = "default"

@@ -14,7 +14,8 @@ from pathlib import Path
 from typing import Any
 
 from ...core.io import atomic_write_json
-from ..run.steps import KINDS, RESULT_FILE, TIMINGS, Step
+from ..run.result import RESULT_FILE, TIMINGS
+from ..run.step import KINDS, Step
 from .grid import Plan
 
 RUN_FILE = "run_timing.json"  # the last run of the study folder: wall seconds, workers, execution, steps run

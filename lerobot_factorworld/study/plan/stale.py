@@ -18,7 +18,8 @@ from pathlib import Path
 from ...core import provenance
 from ...core.provenance import UNKNOWN, Provenance
 from ..run.options import RunOptions
-from ..run.steps import Step, is_done, provenance_of, read_result
+from ..run.result import is_done, provenance_of, read_result
+from ..run.step import Step
 from .grid import Plan
 
 STALE_SUFFIX = ".stale-"  # a redone step's old folder: steps/<kind>/<key>.stale-<commit>

@@ -35,8 +35,7 @@ from ..results.episodes import EPISODES_FILE, episode_rows, write_episodes
 from ..results.eval_results import write_eval_results
 from ..results.rows import RESULTS_FILE, finished_evaluations, read_results, result_rows, write_results
 from ..run.recording import VIDEOS_DIR
-from ..run.step import RUN_CONFIG_FILE
-from ..run.steps import STEPS_DIR
+from ..run.step import RUN_CONFIG_FILE, STEPS_DIR
 from ..sequential import INTERVAL_LABEL
 from .curve_report import CURVE_PLOT, curve_section, plot_curve
 from .episode_videos import MANIFEST, collect_videos

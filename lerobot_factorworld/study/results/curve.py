@@ -19,7 +19,8 @@ from ...stats.proportions import Z95, newcombe_independent, paired_gap, wilson_i
 from ..plan.config import StudyConfig
 from ..plan.grid import CURVE_EPOCHS, Plan
 from ..run.inputs import whole_epochs
-from ..run.steps import TRAINED_ON, Step, is_done, read_result, step_folder
+from ..run.result import TRAINED_ON, is_done, read_result
+from ..run.step import Step, step_folder
 from .rows import Evaluation, csv_text, in_stage_order, parse_stage_counts, policy_of, stage_counts_text
 
 CURVE_FILE = "curve.csv"

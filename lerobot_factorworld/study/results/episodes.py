@@ -42,7 +42,8 @@ from ...stats.proportions import wilson_interval
 from ...tasks import get_task
 from ..plan.config import StudyConfig
 from ..run.inputs import EnvInputs, EvalInputs
-from ..run.steps import RESULT_FILE, Step, read_result, step_folder
+from ..run.result import RESULT_FILE, read_result
+from ..run.step import Step, step_folder
 from .rows import RESULTS_FILE, Evaluation, commits_of, policy_of, provenance_columns
 
 EPISODES_FILE = "episodes.parquet"

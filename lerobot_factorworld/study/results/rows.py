@@ -23,7 +23,8 @@ from ...stats.proportions import paired_gap, wilson_interval
 from ..plan.config import RADIUS_FACTORS, StudyConfig
 from ..plan.grid import Plan, radius_of
 from ..run.blocks import SEQUENTIAL
-from ..run.steps import Step, evaluated, is_done, provenance_of, read_result
+from ..run.result import is_done, provenance_of, read_result
+from ..run.step import Step, evaluated
 
 RESULTS_FILE = "results.csv"
 STAGE_SEPARATOR = ";"  # between the stage:count items of the stages column

@@ -54,7 +54,7 @@ def rule_of(step: Step) -> StopRule:
     return StopRule.from_dict(step.inputs[SEQUENTIAL])
 
 
-Session = Any  # steps.EvalSession: passed in, as steps.py imports this module
+Session = Any  # eval_step.EvalSession: passed in, as worker.py imports both modules
 OpenSession = Callable[[Step], Session]
 Timed = Callable[[str], contextlib.AbstractContextManager]
 

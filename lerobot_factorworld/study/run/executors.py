@@ -1,7 +1,7 @@
 """Executors run the steps they are handed and nothing else: a local process pool (default) or Ray.
 
 A task is a list of steps run one after another in one worker (one step, or the evaluations of one
-checkpoint): both executors call :func:`~lerobot_factorworld.study.run.steps.run_steps` with the same
+checkpoint): both executors call :func:`~lerobot_factorworld.study.run.worker.run_steps` with the same
 arguments and the steps fix their own thread counts, so a plan gives the same results on either. With Ray across several
 machines the study folder must be on a filesystem they share (steps read their inputs' outputs).
 """
@@ -19,8 +19,9 @@ from typing import Any, Protocol
 
 from ...core import provenance
 from ...envs import runtime
-from .step import RUN, Step
-from .steps import device_problem, evaluated, run_steps, warm_up
+from .device import device_problem
+from .step import RUN, Step, evaluated
+from .worker import run_steps, warm_up
 
 # The module the forkserver imports (by name: importing it here would import everything in this process).
 FORKSERVER_PRELOAD = f"{__package__}.forkserver_preload"
@@ -173,12 +174,12 @@ def can_fork() -> bool:
 
 DEVICE_SETTINGS = {"train": "train.device", "eval": "eval.device"}  # a step kind's device, as the config names it
 # What this machine offers, asked of a child Python: a process that asks CUDA itself cannot fork workers using it.
-DEVICE_PROBE = f"from {__package__}.steps import machine_devices; cuda, mps = machine_devices(); print(cuda, int(mps))"
+DEVICE_PROBE = f"from {__package__}.device import machine_devices; cuda, mps = machine_devices(); print(cuda, int(mps))"
 
 
 def check_local_devices(steps: Sequence[Step]) -> None:
     """Refuse, in one line and before any step runs, a ``train.device`` or ``eval.device`` this machine lacks
-    (each step checks again where it runs: :func:`.steps.require_device`)."""
+    (each step checks again where it runs: :func:`.device.require_device`)."""
     wanted = {
         (DEVICE_SETTINGS[s.kind], str(s.inputs["device"]))
         for s in steps
@@ -260,7 +261,7 @@ def lend_idle_workers(units: list[list[Step]], free: int) -> list[list[Step]]:
     """``units`` with the workers they leave idle lent to their collections: a collection's jobs then run in
     that many more processes (``collect.workers`` never changes what is collected, so it is not in the key).
     The first collections get them first, one each in turn. With no collection to lend to, a training alone
-    gets one as its data loader (``steps.loader_args``: the same checkpoint, byte for byte), and so does the one
+    gets one as its data loader (``train_step.loader_args``: the same checkpoint, byte for byte), and so does the one
     training dispatched beside evaluations only: they end within minutes, the training keeps its loader for
     hours (a chain's next link starts beside the evaluation of the point before it)."""
     spare = free - len(units)

@@ -4,7 +4,7 @@ forked from it starts with both, instead of each spawned worker importing for 8-
 is its whole job (``multiprocessing``'s forkserver preloads modules by name)."""
 
 from ...core import provenance
-from .steps import warm_up
+from .worker import warm_up
 
 warm_up()
 provenance.current()  # of the code the server imported, which its workers run (they inherit both)

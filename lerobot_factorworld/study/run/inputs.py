@@ -1,4 +1,5 @@
-"""The inputs of each kind of step, typed: built by ``plan/grid.py``, read by ``steps.py`` and ``plan/cost.py``.
+"""The inputs of each kind of step, typed: built by ``plan/grid.py``, read by the step kinds (``*_step.py``) and
+``plan/cost.py``.
 
 A step's key hashes ``to_dict()`` of its inputs (``Step.inputs``), so ``to_dict`` gives exactly the
 JSON the key has always hashed: the same names, and optional entries left out when unset (a family's

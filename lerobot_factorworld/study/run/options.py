@@ -11,7 +11,7 @@ import os
 from dataclasses import dataclass, field
 
 from ...datasets.hub import check_hub_repo_id
-from .steps import EXECUTIONS
+from .context import EXECUTIONS
 
 EXECUTORS = ("local", "ray")
 # what report_only cannot go with: other ways of not running (each inspects), redoing steps, pushing a finished study

@@ -38,8 +38,8 @@ from ...core.fingerprint import PREFIX as FINGERPRINT_PREFIX
 from ...core.fingerprint import file_fingerprint
 from ...core.io import atomic_write_json, temporary_path
 from .blocks import BLOCKS_DIR
+from .result import EXTENDS, INPUTS_FILE, MERGED_DATA_DIR, RESULT_FILE, TRAIN_DIR
 from .step import RUN_CONFIG_FILE, STEPS_DIR, is_step_key
-from .steps import EXTENDS, INPUTS_FILE, MERGED_DATA_DIR, RESULT_FILE, TRAIN_DIR
 from .train_state import CHECKPOINTS_DIR, COMPLETE, PARTIAL, STATE_DIR, recorded_pass_steps, saved_steps
 
 MANIFEST = "pack.json"

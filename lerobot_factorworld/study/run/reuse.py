@@ -16,7 +16,8 @@ import os
 from collections.abc import Sequence
 from pathlib import Path
 
-from .steps import Step, is_done
+from .result import is_done
+from .step import Step
 
 
 def check_reuse_from(folders: Sequence[str], out_dir: str) -> None:
