@@ -20,7 +20,10 @@ from ..run.inputs import OWN_FRAMES, CollectInputs, EnvInputs, EvalInputs, Train
 from ..run.recording import RECORD_SETTING
 from ..run.step import RUN, Step
 from ..run.steps import versions
-from .config import RADII_M, MethodConfig, StudyConfig, TrainSettings, map_arg_paths, map_policy_paths
+from .config import RADII_M, StudyConfig
+from .method_config import MethodConfig
+from .paths import map_arg_paths, map_policy_paths
+from .train_settings import TrainSettings
 
 DEFAULT_WIDTHS = "default"
 CURVE_EPOCHS = "epochs"  # the label (``Step.meta``) of a learning curve's evaluation: its checkpoint's epochs
