@@ -1,7 +1,8 @@
 """``collect``: how the scripted demonstrations of every (task, N, seed) dataset are made (``factorworld collect``).
 
-Checked on their own when the config is read; whether a family's option suits the study's tasks is
-:meth:`.config.StudyConfig.validate`'s.
+Checked on their own when the config is read; a family's option (``n_objects``, ``template``) is checked by
+:meth:`.config.StudyConfig.validate`, which knows the tasks: set for a task of another family, that is the
+error to name, not its value.
 """
 
 from __future__ import annotations
@@ -12,7 +13,7 @@ from typing import Any
 from ...core.checks import check_choice
 from ...experts import DEFAULT_ACTION_NOISE
 from ...factors.registry import get_factor
-from ...families import all_families, family_of
+from ...families import family_of
 from ...protocol.sampling import DEFAULT_RGB_FRACTION, SamplingOptions
 from ...scene.build import DEFAULT_QUALITY, QUALITIES
 from ...scene.cameras import DEFAULT_CAMERAS_SETTING, DEFAULT_IMAGE_SIZE
@@ -74,13 +75,6 @@ class CollectSettings:
             except ValueError as err:  # "rgb_fraction must be in [0, 1], got 2.0"
                 raise ValueError(f"collect.{err}") from None
         get_factor("object_pos").range(self.object_pos_width)  # raises naming the valid widths
-        for name in dict.fromkeys(n for family in all_families() for n in family.sampling_options):  # declared order
-            value = getattr(self, name)
-            if value is not None:
-                try:
-                    SamplingOptions(**{name: value})  # within the range sampling accepts
-                except ValueError as err:
-                    raise ValueError(f"collect.{err}") from None
 
     @property
     def other_quality(self) -> str | None:

@@ -25,6 +25,7 @@ from ...envs.lerobot_obs import LEROBOT_METAWORLD_OBS, check_lerobot_task
 from ...factors.registry import PAPER_STUDY_FACTORS, WIDTHS, check_task_support, get_factor
 from ...families import all_families, condition_family, family_of
 from ...protocol.conditions import PAIR_SEPARATOR, condition_name, parse_shift
+from ...protocol.sampling import SamplingOptions
 from ...tasks import get_task
 from ..run.inputs import OWN_FRAMES
 from .claim_config import ClaimConfig
@@ -277,14 +278,21 @@ class StudyConfig:
 
     def _validate_family_options(self) -> None:
         """A family's sampling option (``collect.n_objects``) is set only for tasks of families that read
-        it (its range is ``CollectSettings``'s own check)."""
+        it, and within the range ``SamplingOptions`` accepts."""
         for family in all_families():
             for name in family.sampling_options:
+                value = getattr(self.collect, name)
+                if value is None:
+                    continue
                 others = [t for t in self.tasks if name not in family_of(t).sampling_options]
-                if getattr(self.collect, name) is not None and others:
+                if others:
                     raise ValueError(
                         f"collect.{name} applies to the {family.name} family only, not to {', '.join(others)}"
                     )
+                try:
+                    SamplingOptions(**{name: value})
+                except ValueError as err:
+                    raise ValueError(f"collect.{err}") from None
 
     def missing_weight_files(self) -> list[str]:
         """``method 'x': <setting> <path>`` for every weights file a method names that does not exist."""
@@ -316,8 +324,8 @@ class StudyConfig:
             )
 
     def _validate_episodes(self) -> None:
-        """The episodes fit the study's N (each test environment paired with a training one) and its demos cover
-        them (the evaluation's own checks are ``EvalSettings``'s)."""
+        """The episodes fit the study's N (each test environment paired with a training one) and the test
+        environments, and the demos cover the N (the evaluation's other checks are ``EvalSettings``'s)."""
         ev = self.eval
         if ev.auto:
             self._validate_auto()
@@ -330,6 +338,11 @@ class StudyConfig:
                 )
             if count % n:
                 raise ValueError(f"{setting} must be a multiple of every N (got N={n})")
+        if count % ev.n_test_envs:  # after the N: a count that misses both is told the N first
+            raise ValueError(
+                f"{setting} must be a multiple of eval.n_test_envs={ev.n_test_envs}, so that every "
+                "test environment is visited equally"
+            )
         for task in self.tasks if self.trained_methods() else ():  # demos are collected for training only
             if self.collect.demos_for(task) < max(self.n_train_envs):
                 raise ValueError(

@@ -1,8 +1,8 @@
 """``eval``: how every checkpoint is evaluated on every condition (LeRobot's ``eval_policy_all``).
 
 Checked on their own when the config is read; what depends on the study's N, seeds, claims and curves (episodes
-a multiple of every N, ``episodes: auto`` only where no fixed-n interval is reported) is
-:meth:`.config.StudyConfig.validate`'s.
+a multiple of every N, then of ``n_test_envs``, so that a count that misses both is told the N first;
+``episodes: auto`` only where no fixed-n interval is reported) is :meth:`.config.StudyConfig.validate`'s.
 """
 
 from __future__ import annotations
@@ -72,12 +72,6 @@ class EvalSettings:
                 raise ValueError(f"eval.max_episode_steps_per_task[{task}] must be at least 1, got {limit}")
         if self.max_episode_steps is not None and self.max_episode_steps < 1:
             raise ValueError(f"eval.max_episode_steps must be at least 1, got {self.max_episode_steps}")
-        setting, count = self.round()
-        if count % self.n_test_envs:
-            raise ValueError(
-                f"{setting} must be a multiple of eval.n_test_envs={self.n_test_envs}, so that every "
-                "test environment is visited equally"
-            )
 
     def round(self) -> tuple[str, int]:
         """The episodes a condition runs at a time, and the setting that says so (``eval.episodes=20``, or
