@@ -10,7 +10,8 @@ import pytest
 
 from lerobot_factorworld.study.paper import PAPER_FACTOR_RANKS
 from lerobot_factorworld.study.plan.claim_config import ClaimConfig
-from lerobot_factorworld.study.plan.config import MethodConfig, StudyConfig
+from lerobot_factorworld.study.plan.config import StudyConfig
+from lerobot_factorworld.study.plan.method_config import MethodConfig
 from lerobot_factorworld.study.report.claims_markdown import to_resolve
 from lerobot_factorworld.study.report.write import load_config, regenerate_report
 from lerobot_factorworld.study.results.aggregate import method_rho_differences

@@ -17,7 +17,8 @@ import numpy as np
 import pytest
 
 from lerobot_factorworld.stats.proportions import wilson_interval
-from lerobot_factorworld.study.plan.config import MethodConfig, StudyConfig
+from lerobot_factorworld.study.plan.config import StudyConfig
+from lerobot_factorworld.study.plan.method_config import MethodConfig
 from lerobot_factorworld.study.report.claims_markdown import claim_rows
 from lerobot_factorworld.study.report.episode_videos import MANIFEST
 from lerobot_factorworld.study.report.html_report import HTML_FILE, PLOTLY_JS, write_html_report, write_plotly_js

@@ -11,7 +11,8 @@ import pytest
 from lerobot_factorworld.stats import bootstrap, power, proportions, ranks, summaries
 from lerobot_factorworld.study.paper import PAPER_FACTOR_RANKS
 from lerobot_factorworld.study.plan import power as plan_power
-from lerobot_factorworld.study.plan.config import EvalSettings, StudyConfig
+from lerobot_factorworld.study.plan.config import StudyConfig
+from lerobot_factorworld.study.plan.eval_settings import EvalSettings
 from lerobot_factorworld.study.plan.grid import DEFAULT_WIDTHS
 from lerobot_factorworld.study.report.markdown import (
     _gap_against_n_section,

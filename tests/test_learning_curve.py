@@ -16,8 +16,8 @@ from lerobot_factorworld.core.settings import parse_config
 from lerobot_factorworld.envs.stages import stage_names
 from lerobot_factorworld.stats.proportions import newcombe_independent, paired_gap
 from lerobot_factorworld.study.plan.command import StudyCommand
-from lerobot_factorworld.study.plan.config import TrainSettings
 from lerobot_factorworld.study.plan.grid import CURVE_EPOCHS, make_plan
+from lerobot_factorworld.study.plan.train_settings import TrainSettings
 from lerobot_factorworld.study.report.curve_report import curve_section
 from lerobot_factorworld.study.results.curve import (
     CURVE_COLUMNS,
@@ -438,7 +438,7 @@ def test_a_method_s_bad_training_settings_are_refused_naming_the_method(tmp_path
 
 
 def test_a_given_checkpoint_takes_no_training_settings(tmp_path):
-    from lerobot_factorworld.study.plan.config import MethodConfig
+    from lerobot_factorworld.study.plan.method_config import MethodConfig
 
     with pytest.raises(ValueError, match="train settings apply to a trained method, not a given checkpoint"):
         MethodConfig("given", checkpoint=str(tmp_path), train={"epochs": 2})

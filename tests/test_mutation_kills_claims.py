@@ -21,7 +21,8 @@ from scipy import stats
 
 from lerobot_factorworld.stats import bootstrap, decision, power
 from lerobot_factorworld.study.plan.claim_config import ClaimConfig
-from lerobot_factorworld.study.plan.config import MethodConfig, StudyConfig
+from lerobot_factorworld.study.plan.config import StudyConfig
+from lerobot_factorworld.study.plan.method_config import MethodConfig
 from lerobot_factorworld.study.results import claims
 from lerobot_factorworld.study.results.claims import AGREES, CAPPED, DISAGREES, NOT_RESOLVED, Decided, decide
 

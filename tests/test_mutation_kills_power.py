@@ -11,7 +11,8 @@ import pytest
 
 from lerobot_factorworld.stats import power, proportions
 from lerobot_factorworld.study.plan import power as plan_power
-from lerobot_factorworld.study.plan.config import EvalSettings, StudyConfig
+from lerobot_factorworld.study.plan.config import StudyConfig
+from lerobot_factorworld.study.plan.eval_settings import EvalSettings
 
 
 def _by_episodes(n: int, p_train: float, z: float = proportions.Z95) -> float:

@@ -11,7 +11,8 @@ import pytest
 
 from lerobot_factorworld.core.provenance import Provenance
 from lerobot_factorworld.stats import proportions
-from lerobot_factorworld.study.plan.config import MethodConfig, StudyConfig
+from lerobot_factorworld.study.plan.config import StudyConfig
+from lerobot_factorworld.study.plan.method_config import MethodConfig
 from lerobot_factorworld.study.results.rows import (
     RESULT_COLUMNS,
     Evaluation,

@@ -16,8 +16,10 @@ import pytest
 from lerobot_factorworld.core import provenance
 from lerobot_factorworld.core.provenance import Provenance
 from lerobot_factorworld.study.plan import stale
-from lerobot_factorworld.study.plan.config import EvalSettings, MethodConfig, StudyConfig
+from lerobot_factorworld.study.plan.config import StudyConfig
+from lerobot_factorworld.study.plan.eval_settings import EvalSettings
 from lerobot_factorworld.study.plan.grid import Plan, make_plan
+from lerobot_factorworld.study.plan.method_config import MethodConfig
 from lerobot_factorworld.study.run.options import RunOptions
 from lerobot_factorworld.study.run.result import PROVENANCE, RESULT_FILE, is_done, read_result
 from lerobot_factorworld.study.run.step import Step

@@ -6,9 +6,11 @@ from __future__ import annotations
 import pytest
 
 from lerobot_factorworld.datasets.merge import features_mismatch, merge_datasets
-from lerobot_factorworld.study.plan.config import MethodConfig, StudyConfig, TrainSettings
+from lerobot_factorworld.study.plan.config import StudyConfig
 from lerobot_factorworld.study.plan.cost import load_model, step_cost
 from lerobot_factorworld.study.plan.grid import make_plan
+from lerobot_factorworld.study.plan.method_config import MethodConfig
+from lerobot_factorworld.study.plan.train_settings import TrainSettings
 from lerobot_factorworld.study.run.inputs import TrainInputs
 from lerobot_factorworld.study.run.train_schedule import epoch_frames, train_steps
 from lerobot_factorworld.tasks import get_task

@@ -156,9 +156,11 @@ def test_a_hub_id_in_the_local_cache_is_used_offline(factorworld_checkpoint, tmp
 
 
 def test_a_study_mixing_a_trained_and_a_given_method_plans_both(factorworld_checkpoint, tmp_path):
-    from lerobot_factorworld.study.plan.config import EvalSettings, MethodConfig, StudyConfig
+    from lerobot_factorworld.study.plan.config import StudyConfig
     from lerobot_factorworld.study.plan.cost import describe
+    from lerobot_factorworld.study.plan.eval_settings import EvalSettings
     from lerobot_factorworld.study.plan.grid import make_plan
+    from lerobot_factorworld.study.plan.method_config import MethodConfig
     from lerobot_factorworld.study.run.executors import task_units
     from lerobot_factorworld.study.run.inputs import CollectInputs, EvalInputs
     from lerobot_factorworld.study.run.options import RunOptions

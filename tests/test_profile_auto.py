@@ -37,7 +37,9 @@ def test_the_rule_is_in_the_keys_only_with_auto(factorworld_checkpoint, tmp_path
 
 
 def test_auto_is_refused_where_claims_need_fixed_n_intervals(factorworld_checkpoint, tmp_path):
-    from lerobot_factorworld.study.plan.config import EvalSettings, MethodConfig, StudyConfig
+    from lerobot_factorworld.study.plan.config import StudyConfig
+    from lerobot_factorworld.study.plan.eval_settings import EvalSettings
+    from lerobot_factorworld.study.plan.method_config import MethodConfig
 
     given = [MethodConfig("given", checkpoint=str(factorworld_checkpoint))]
     base = {"tasks": ["pick-place"], "n_train_envs": [1], "train_factors": ["light"], "factors": ["light"],

@@ -168,7 +168,9 @@ def test_lerobot_env_config_takes_the_share_and_a_dataset_keeps_its_own(tmp_path
 
 
 def _study(**collect):
-    from lerobot_factorworld.study.plan.config import CollectSettings, EvalSettings, StudyConfig
+    from lerobot_factorworld.study.plan.collect_settings import CollectSettings
+    from lerobot_factorworld.study.plan.config import StudyConfig
+    from lerobot_factorworld.study.plan.eval_settings import EvalSettings
 
     return StudyConfig(
         tasks=["door-open"],

@@ -154,8 +154,9 @@ def test_the_pairs_section_counts_cells_whose_pair_metric_is_undefined():
 
 def test_a_pick_study_report_sets_success_next_to_the_papers_real_robot_table():
     from lerobot_factorworld.family_reports.pick import real_robot_section as _real_robot_section
-    from lerobot_factorworld.study.plan.config import MethodConfig, StudyConfig
+    from lerobot_factorworld.study.plan.config import StudyConfig
     from lerobot_factorworld.study.plan.grid import DEFAULT_WIDTHS
+    from lerobot_factorworld.study.plan.method_config import MethodConfig
 
     cfg = StudyConfig(
         tasks=["pick"],
@@ -835,7 +836,8 @@ def test_cli_dry_run_and_one_line_errors(tmp_path, run_main):
 
 def test_a_method_may_be_any_registered_lerobot_policy_type():
     """LeRobot's own policy types (act, diffusion, ...) train in a study like bc and rt1; a typo names them all."""
-    from lerobot_factorworld.study.plan.config import MethodConfig, check_policy
+    from lerobot_factorworld.study.plan.method_config import MethodConfig
+    from lerobot_factorworld.study.plan.policy_checks import check_policy
 
     check_policy(MethodConfig(name="act", policy={"type": "act", "chunk_size": 10, "n_action_steps": 10}))
     with pytest.raises(ValueError, match="unknown policy type 'actt'; valid types: act, bc, diffusion"):

@@ -34,7 +34,9 @@ def _cfg(**overrides) -> StudyConfig:
         "eval": {"n_test_envs": 2, "episodes": 2},
     }
     settings.update(overrides)
-    from lerobot_factorworld.study.plan.config import CollectSettings, EvalSettings, TrainSettings
+    from lerobot_factorworld.study.plan.collect_settings import CollectSettings
+    from lerobot_factorworld.study.plan.eval_settings import EvalSettings
+    from lerobot_factorworld.study.plan.train_settings import TrainSettings
 
     for name, cls in (("collect", CollectSettings), ("train", TrainSettings), ("eval", EvalSettings)):
         if isinstance(settings.get(name), dict):

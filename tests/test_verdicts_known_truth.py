@@ -27,7 +27,8 @@ from test_claims import _row, rows_of
 from lerobot_factorworld import cli
 from lerobot_factorworld.stats import proportions
 from lerobot_factorworld.study.plan.claim_config import ClaimConfig
-from lerobot_factorworld.study.plan.config import MethodConfig, StudyConfig
+from lerobot_factorworld.study.plan.config import StudyConfig
+from lerobot_factorworld.study.plan.method_config import MethodConfig
 from lerobot_factorworld.study.report.claims_markdown import claims_section, to_resolve
 from lerobot_factorworld.study.report.markdown import render
 from lerobot_factorworld.study.results import aggregate

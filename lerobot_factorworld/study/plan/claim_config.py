@@ -32,8 +32,24 @@ PAIR_RELATIONS = ("within", "synergistic")
 
 @dataclass
 class ClaimConfig:
-    """One claim of the paper. Attributes: see the module docstring; ``source`` is where the paper makes it
-    (section, figure or text) and ``text`` the claim in words (the claims table prints both)."""
+    """One claim of the paper (the kinds: the module docstring). Checked by :meth:`validate` against its study's
+    methods, tasks, factors and pairs, which a claim alone does not know.
+
+    Args:
+        kind: One of :data:`CLAIM_KINDS`.
+        text: The claim in words (the claims table prints it).
+        source: Where the paper makes it: section, figure or text.
+        method: The method it is about (``None``: the study's first).
+        task: The task it is about (``None``: every task, pooled).
+        factors: The factors it names (``gap_opens``, ``gap_exceeds``, ``trend``, ``method_shrinks``).
+        tiers: ``ordering``'s tiers of factors, hardest first.
+        over: ``trend``'s axis, ``n`` or ``radius``.
+        direction: ``trend``'s direction, ``shrinks`` or ``grows``.
+        pair: ``pair``'s condition, ``a+b``.
+        relation: ``pair``'s relation, ``within`` ±``tolerance`` of 0 or ``synergistic`` (below -``tolerance``).
+        tolerance: ``pair``'s band around 0.
+        baseline: ``method_shrinks``'s other method.
+    """
 
     kind: str = ""
     text: str = ""

@@ -19,7 +19,10 @@ from ..run.checkpoint import GIVEN_CHECKPOINT, keyed_checkpoint
 from ..run.inputs import OWN_FRAMES, CollectInputs, EnvInputs, EvalInputs, TrainInputs
 from ..run.recording import RECORD_SETTING
 from ..run.step import RUN, Step, versions
-from .config import RADII_M, MethodConfig, StudyConfig, TrainSettings, map_arg_paths, map_policy_paths
+from .config import RADII_M, StudyConfig
+from .method_config import MethodConfig
+from .paths import map_arg_paths, map_policy_paths
+from .train_settings import TrainSettings
 
 DEFAULT_WIDTHS = "default"
 CURVE_EPOCHS = "epochs"  # the label (``Step.meta``) of a learning curve's evaluation: its checkpoint's epochs

@@ -17,7 +17,10 @@ from ...protocol.sampling import SamplingOptions
 from ...scene.build import DEFAULT_QUALITY
 from ..run.checkpoint import local_folder, read_policy_config, training_dataset
 from ..run.options import RunOptions
-from .config import HUB_BENCHMARK, CollectSettings, EvalSettings, MethodConfig, StudyConfig
+from .collect_settings import CollectSettings
+from .config import HUB_BENCHMARK, StudyConfig
+from .eval_settings import EvalSettings
+from .method_config import MethodConfig
 
 DEFAULT_METHOD = "checkpoint"  # the method's name when the checkpoint's config names no policy type
 

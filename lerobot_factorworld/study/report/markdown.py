@@ -23,7 +23,8 @@ from ..paper import (
     PAPER_PAIR_TOLERANCE,
     PAPER_PAIRS_WITHIN,
 )
-from ..plan.config import MethodConfig, StudyConfig
+from ..plan.config import StudyConfig
+from ..plan.method_config import MethodConfig
 from ..results.aggregate import (
     ALL_FACTORS,
     RADIUS_STEP_M,
