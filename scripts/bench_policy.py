@@ -486,14 +486,12 @@ def main(argv: list[str] | None = None) -> int:
     args = parse_args(argv)
     kind = _bench.device_kind(args.device)
     device_name = torch.cuda.get_device_name(args.device) if kind == "cuda" else "cpu"
-    print(
-        f"RT-1 presets {', '.join(args.preset_list)} on {args.device} ({device_name}, "
-        f"torch {torch.__version__}, {torch.get_num_threads()} threads), {args.rounds} round(s)",
-        flush=True,
-    )
-
+    machine = f"{args.device} ({device_name}, torch {torch.__version__}, {torch.get_num_threads()} threads)"
     if args.frames_only:
+        print(f"RT-1 {' against '.join(FROZEN_PAIR)} on real frames on {machine}", flush=True)
         return main_frames(args)
+    print(f"RT-1 presets {', '.join(args.preset_list)} on {machine}, {args.rounds} round(s)", flush=True)
+
     total = 0
     for preset in args.preset_list:
         _, train_steps, infer_steps = workload(preset, args, kind)
