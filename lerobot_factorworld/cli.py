@@ -289,7 +289,8 @@ class ReportConfig:
 
 
 def cmd_report(args: list[str]) -> None:
-    # the study's config checks its policies with LeRobot (~4 s): only when this command runs
+    # the report's stack (the study's config, statistics, plots: ~2 s; no LeRobot, whose policy checks a report
+    # skips): only when this command runs
     from .study.report.write import regenerate_report  # noqa: PLC0415
 
     cfg = parse_config(ReportConfig, _report_args(args), "report")
@@ -408,7 +409,7 @@ class CompareCurvesConfig:
 
 
 def cmd_compare_curves(args: list[str]) -> None:
-    # the study's config (LeRobot's policy checks, ~4 s) and statistics: only when this command runs
+    # the study's config and statistics (a report's stack, no LeRobot): only when this command runs
     from .study.report.write import config_next_to, load_config  # noqa: PLC0415
     from .study.results.compare_curves import CurveSide, curve_comparison_lines  # noqa: PLC0415
     from .study.results.curve import CURVE_FILE, read_curve  # noqa: PLC0415
@@ -499,7 +500,7 @@ class MergeResultsConfig:
 
 
 def cmd_merge_results(args: list[str]) -> None:
-    # the study's config checks its policies with LeRobot (~4 s): only when this command runs
+    # the study's config and plan, and the report (a report's stack, no LeRobot): only when this command runs
     from .study.plan.grid import make_plan  # noqa: PLC0415
     from .study.report.write import config_next_to, load_config  # noqa: PLC0415
     from .study.results.episodes import EPISODES_FILE  # noqa: PLC0415
@@ -631,7 +632,7 @@ class SyncDocsConfig:
 
 
 def cmd_sync_docs(args: list[str]) -> None:
-    # the study's configs check their policies with LeRobot (~4 s): only when this command runs
+    # every committed study's report (a report's stack, no LeRobot): only when this command runs
     from .study.report.published import RESULTS_ROOT, committed_studies, stale_published, sync_published  # noqa: PLC0415
 
     cfg = parse_config(SyncDocsConfig, ["--check=true" if arg == "--check" else arg for arg in args], "sync-docs")

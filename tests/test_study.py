@@ -844,6 +844,34 @@ def test_a_method_may_be_any_registered_lerobot_policy_type():
         check_policy(MethodConfig(name="typo", policy={"type": "actt"}))
 
 
+def test_a_bad_policy_stops_a_study_and_its_dry_run_but_not_a_report_s_reading(tmp_path, run_main):
+    """LeRobot checks the policies where a study runs or is planned, in one line before any work: the command's
+    parsing and the library's entry points; a report reads the config without it (loading no torch:
+    tests/test_runtime_layers.py)."""
+    from lerobot_factorworld.cli import main
+    from lerobot_factorworld.study.report.write import load_config
+    from lerobot_factorworld.study.run.options import RunOptions
+    from lerobot_factorworld.study.runner import inspect_study, report_study, run_study
+
+    _, path = _toy_config(tmp_path / "toy")
+    for policy, message in (("{type: actt}", "unknown policy type 'actt'"), ("{type: bc, bogus: 1}", "bogus")):
+        bad = tmp_path / "bad.yaml"
+        bad.write_text(path.read_text().replace("{type: bc}", policy))
+        for args in (["--dry-run"], [], ["--report-only"]):
+            result = run_main(["factorworld", "study", f"--config={bad}", *args], main)
+            assert result.returncode == 2 and result.stderr.startswith("error: method 'bc': "), result.stderr
+            assert message in result.stderr and len(result.stderr.splitlines()) == 1
+        grid = load_config(bad)  # as factorworld report reads it: no LeRobot
+        for start, options in (
+            (inspect_study, RunOptions(dry_run=True)),
+            (run_study, RunOptions()),
+            (report_study, RunOptions(report_only=True)),
+        ):
+            with pytest.raises(ValueError, match=message):
+                start(grid, options, *(["factorworld study"] if start is report_study else []))
+    assert not (tmp_path / "toy").exists()  # refused before any work
+
+
 STUDY_CONFIGS = sorted(
     str(p.relative_to(ROOT / "configs" / "study")) for p in (ROOT / "configs" / "study").rglob("*.yaml")
 )

@@ -16,8 +16,6 @@ import math
 from dataclasses import asdict
 from typing import Any
 
-from lerobot.utils.constants import ACTION, OBS_IMAGES, OBS_STATE
-
 from ..factors.registry import FACTORS
 from ..factors.values import SceneObject
 from ..families import family_of
@@ -35,6 +33,10 @@ ACTION_NAMES = ["dx", "dy", "dz", "grip"]
 
 def frame_features(cameras: tuple[str, ...], image_size: tuple[int, int], use_videos: bool = True) -> dict:
     """LeRobot features of a Factor World frame (keys match ``FactorWorldEnvConfig.features_map``)."""
+    # LeRobot's names, imported here: the column names above are read by the dataset card and a study's report,
+    # which load no LeRobot (importing it loads torch: seconds)
+    from lerobot.utils.constants import ACTION, OBS_IMAGES, OBS_STATE  # noqa: PLC0415
+
     h, w = image_size
     features = {
         f"{OBS_IMAGES}.{cam}": {

@@ -175,9 +175,12 @@ def report_study(cfg: StudyConfig, options: RunOptions, command: str) -> StudyOu
 
 
 def _check_grid(cfg: StudyConfig) -> None:
-    """A flat study command passed as the grid would run with default options, its own silently dropped."""
+    """A flat study command passed as the grid would run with default options, its own silently dropped; and
+    LeRobot's verdict on the policies, which a grid built in code (not read as a :class:`.plan.command.StudyCommand`)
+    has not had yet: before any work, as the command's parsing checks them."""
     if isinstance(cfg, RunOptions):
         raise TypeError("pass the grid and the run options apart: run_study(*command.parts()), not the command")
+    cfg.check_policies()
 
 
 def _push(options: RunOptions, outcome: StudyOutcome) -> bool:

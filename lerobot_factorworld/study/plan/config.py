@@ -5,7 +5,8 @@ the conditions: ``train``, every factor in ``factors``, the ``pairs``, and the r
 table position sampled, for training and test alike, from radii 0.025 / 0.05 / 0.075 m). Everything is
 checked before any work starts: each settings group checks itself (``method_config.py``,
 ``collect_settings.py``, ``train_settings.py``, ``eval_settings.py``), and :class:`StudyConfig` composes them
-and checks what depends on more than one, LeRobot's verdict on the policy settings last (``policy_checks.py``).
+and checks what depends on more than one. LeRobot's verdict on the policy settings (``policy_checks.py``) is
+:meth:`StudyConfig.check_policies`, asked where a study is run or planned, not where a report reads its config.
 """
 
 from __future__ import annotations
@@ -206,7 +207,12 @@ class StudyConfig:
         for method in self.trained_methods():
             if method.train:
                 self.train_for(method).check_budgets(f"method {method.name!r}: train")
-        for method in self.trained_methods():  # last: importing LeRobot's policy configs takes seconds
+
+    def check_policies(self) -> None:
+        """LeRobot's verdict on the trained methods' policy settings. Apart from :meth:`validate`, since importing
+        LeRobot's policy configs loads torch (seconds): a study that runs or is planned asks for it
+        (:class:`.command.StudyCommand`, the runner), a report of a study that ran reads its config without it."""
+        for method in self.trained_methods():
             check_policy(method)
             if self.train_for(method).extends:
                 check_extendable(method, self.train_for(method))
@@ -238,7 +244,7 @@ class StudyConfig:
     def _validate_methods(self) -> None:
         """Each method is a valid policy, named once, with settings no other method has (one train key each);
         a given checkpoint is named once per observation, and LeRobot's observation needs Meta-World tasks.
-        (Their policy settings are checked last, by ``validate``.)"""
+        (Their policy settings are LeRobot's to check: :meth:`check_policies`.)"""
         if any(m.obs == LEROBOT_METAWORLD_OBS for m in self.methods):
             for task in self.tasks:
                 check_lerobot_task(get_task(task))  # "the pick family has no LeRobot counterpart"

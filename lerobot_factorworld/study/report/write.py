@@ -26,7 +26,7 @@ import yaml
 from ...core.io import atomic_write_text
 from ...core.settings import parse_config
 from ...families import family_of
-from ..plan.command import StudyCommand
+from ..plan.command import ReportedStudy
 from ..plan.config import StudyConfig, write_run_config
 from ..plan.grid import Plan, make_plan
 from ..plan.profile import profile_markdown
@@ -234,7 +234,7 @@ def load_config(path: str | Path) -> StudyConfig:
 @functools.lru_cache(maxsize=128)
 def _parsed_config(path: str, mtime_ns: int = 0, size: int = 0) -> StudyConfig:
     """``path`` parsed (``mtime_ns`` and ``size`` only key the cache: a changed file is parsed again)."""
-    return parse_config(StudyCommand, [f"--config_path={path}", f"--{REUSE_SETTING}=[]"], "study").grid()
+    return parse_config(ReportedStudy, [f"--config_path={path}", f"--{REUSE_SETTING}=[]"], "study").grid()
 
 
 def check_study_name(rows: Sequence[dict], name: str, results: Path) -> None:
