@@ -9,7 +9,13 @@ from dataclasses import dataclass, field
 from types import MappingProxyType
 
 from ..plan.config import StudyConfig
-from ..results.aggregate import FactorGapBootstrap, factor_gap_bootstrap, per_task_success, task_orderings
+from ..results.aggregate import (
+    FactorGapBootstrap,
+    factor_gap_bootstrap,
+    per_task_success,
+    stage_counts,
+    task_orderings,
+)
 from ..results.claims import ClaimVerdict, decide_together, study_claims
 
 Pooled = tuple[int, int, float, float]  # successes, episodes, 95% interval low, high (aggregate.pooled_success)
@@ -28,6 +34,7 @@ class StudyAnalysis:
             factors on that task's rows alone.
         per_task_success: success per (method, task, N, condition), pooled over seeds, with its interval.
         verdicts: the study's claims decided on the rows, corrected with its finding's other studies.
+        stage_counts: episodes per furthest stage per (method, task, N, condition), pooled over seeds.
     """
 
     gap_bootstraps: Mapping[str, FactorGapBootstrap] = field(default_factory=lambda: MappingProxyType({}))
@@ -35,16 +42,20 @@ class StudyAnalysis:
     task_orderings: Mapping[str, FactorGapBootstrap] = field(default_factory=lambda: MappingProxyType({}))
     per_task_success: Mapping[tuple, Pooled] = field(default_factory=lambda: MappingProxyType({}))
     verdicts: tuple[ClaimVerdict, ...] = ()
+    stage_counts: Mapping[tuple, Mapping[str, int]] = field(default_factory=lambda: MappingProxyType({}))
 
 
 def analyze(
     cfg: StudyConfig, rows: Sequence[dict], companions: Sequence[tuple[StudyConfig, Sequence[dict]]] = ()
 ) -> StudyAnalysis:
     """The :class:`StudyAnalysis` of ``rows`` (``results.csv``'s, typed by ``read_results``) under ``cfg``;
-    ``companions``: the other studies of its finding, whose claims are corrected with its own."""
+    ``companions``: the other studies of its finding, whose claims are corrected with its own. An
+    ``eval.episodes=auto`` study gets its stage counts alone: every other quantity rests on fixed-n intervals,
+    which its stopping invalidates."""
     rows = list(rows)
-    if not rows:
-        return StudyAnalysis()
+    stages = MappingProxyType(stage_counts(rows))
+    if not rows or cfg.eval.auto:
+        return StudyAnalysis(stage_counts=stages)
     boots: dict[str, FactorGapBootstrap] = {}
     shifted = None
     orderings: dict[str, FactorGapBootstrap] = {}
@@ -63,6 +74,7 @@ def analyze(
         task_orderings=MappingProxyType(orderings),
         per_task_success=MappingProxyType(per_task_success(rows, cfg.factors)),
         verdicts=tuple(decide_claims(cfg, rows, companions)),
+        stage_counts=stages,
     )
 
 

@@ -32,7 +32,6 @@ from ..plan.config import StudyConfig
 from ..results.aggregate import (
     Interval,
     factor_ordering,
-    stage_counts,
 )
 from ..results.claims import ClaimVerdict
 from ..results.curve import CURVE_FILE, pooled_curve
@@ -96,14 +95,14 @@ def write_html_report(
         sections = [
             ("stopping", "How each condition stopped",
              _p(stopping.note) + _table(stopping.columns, stopping.cells, numeric=(4, 6, 7, 8, 9))),
-            ("stages", "Where episodes fail", _stages_section(cfg, rows)),
+            ("stages", "Where episodes fail", _stages_section(cfg, analysis)),
             ("episodes", "Paired episodes", _viewer_section(out_dir)),
         ]  # fmt: skip
     else:
         sections = [
             ("gaps", "Each factor's gap", _gap_section(cfg, rows, analysis)),
             ("claims", "The paper's claims", _claims_section(analysis.verdicts)),
-            ("stages", "Where episodes fail", _stages_section(cfg, rows)),
+            ("stages", "Where episodes fail", _stages_section(cfg, analysis)),
             ("success", "Success rates", _success_section(cfg, analysis)),
             *([("curve", "Learning curve", _curve_section(curve))] if curve else []),
             ("episodes", "Paired episodes", _viewer_section(out_dir)),
@@ -230,8 +229,8 @@ def _claims_section(verdicts: Sequence[ClaimVerdict]) -> str:
     return "\n".join(parts)
 
 
-def _stages_section(cfg: StudyConfig, rows: Sequence[dict]) -> str:
-    counts = stage_counts(rows)
+def _stages_section(cfg: StudyConfig, analysis: StudyAnalysis) -> str:
+    counts = analysis.stage_counts
     if not counts:
         return _p("No evaluation of this study recorded its episodes' stages.")
     tables = stage_tables(cfg, counts)

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import math
 from collections import Counter, defaultdict
-from collections.abc import Callable, Iterable, Sequence
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from pathlib import Path
 
 from ...core.provenance import UNKNOWN
@@ -44,7 +44,6 @@ from ..results.aggregate import (
     radius_rows,
     radius_slopes,
     shared_cell_count,
-    stage_counts,
     success_per_condition_and_n,
     summary,
 )
@@ -165,7 +164,7 @@ def render(
     lines += _radius_section(cfg, rows)
     lines += _success_table(cfg, rows)
     lines += _per_task_table(cfg, rows, analysis)
-    lines += _stages_section(cfg, rows)
+    lines += _stages_section(cfg, analysis)
     lines += _cells_table(rows)
     lines += ["## Plots", ""]
     for path in plots:
@@ -772,10 +771,10 @@ def stages_note(names: Iterable[str] = ()) -> str:
     )
 
 
-def _stages_section(cfg: StudyConfig, rows: list[dict]) -> list[str]:
+def _stages_section(cfg: StudyConfig, analysis: StudyAnalysis) -> list[str]:
     """Where episodes fail: per method x task x N x condition, the share of episodes by furthest stage, one
     table per list of stages (tasks of one kind share a table); nothing when no row has stage counts."""
-    counts = stage_counts(rows)
+    counts = analysis.stage_counts
     if not counts:
         return []
     tables = stage_tables(cfg, counts)
@@ -791,7 +790,7 @@ def _stages_section(cfg: StudyConfig, rows: list[dict]) -> list[str]:
     return lines
 
 
-def stage_tables(cfg: StudyConfig, counts: dict[tuple, dict[str, int]]) -> dict[tuple[str, ...], list[tuple]]:
+def stage_tables(cfg: StudyConfig, counts: Mapping[tuple, Mapping[str, int]]) -> dict[tuple[str, ...], list[tuple]]:
     """The rows of the "Where episodes fail" tables: per list of stage names (tasks of one kind share one), the
     keys (method, task, N, condition) of ``aggregate.stage_counts`` in the report's order, ``train`` first."""
     order = [TRAIN_SUITE, *cfg.conditions()]

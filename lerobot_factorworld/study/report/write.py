@@ -26,7 +26,7 @@ import yaml
 from ...core.io import atomic_write_text
 from ...core.settings import parse_config
 from ...families import family_of
-from ..analysis.study import StudyAnalysis, analyze
+from ..analysis.study import analyze
 from ..plan.command import StudyCommand
 from ..plan.config import StudyConfig, write_run_config
 from ..plan.grid import Plan, make_plan
@@ -96,18 +96,18 @@ def render_report(
     corrected with its own: :func:`finding_companions`); report.md's and the plots' paths."""
     if not cfg.trained_methods():  # a profile of given checkpoints: its results for their model pages
         write_eval_results(cfg, rows, out_dir)
+    analysis = analyze(cfg, rows, companions)  # once, for the plots, report.md and report.html
     if cfg.eval.auto:  # intervals valid under the stopping only: none of the fixed-n sections, plots or page
-        text = render_auto(cfg, rows, command, planned, _stages_section(cfg, rows))
+        text = render_auto(cfg, rows, command, planned, _stages_section(cfg, analysis))
         if tail:
             text = text.rstrip("\n") + "\n\n" + "\n".join(tail)
         note = f"Every interval is {INTERVAL_LABEL}: {rule_text(cfg)}. " + STOPPED_NOTE.format(
             tolerance=cfg.eval.tolerance, budget=cfg.eval.max_episodes
         )
         write_html_report(
-            cfg, rows, out_dir, StudyAnalysis(), stopping=StoppingTable(note, STOP_COLUMNS, stop_cells(cfg, rows))
+            cfg, rows, out_dir, analysis, stopping=StoppingTable(note, STOP_COLUMNS, stop_cells(cfg, rows))
         )
         return atomic_write_text(out_dir / REPORT_FILE, text), []
-    analysis = analyze(cfg, rows, companions)  # once, for the plots, report.md and report.html
     plots = write_plots(rows, cfg, out_dir, analysis)
     families = families_of(cfg)
     (out_dir / CURVE_PLOT).unlink(missing_ok=True)
