@@ -17,12 +17,13 @@ import numpy as np
 import pytest
 
 from lerobot_factorworld.stats.proportions import wilson_interval
+from lerobot_factorworld.study.analysis.study import analyze
 from lerobot_factorworld.study.plan.config import StudyConfig
 from lerobot_factorworld.study.plan.method_config import MethodConfig
 from lerobot_factorworld.study.report.claims_markdown import claim_rows
 from lerobot_factorworld.study.report.episode_videos import MANIFEST
 from lerobot_factorworld.study.report.html_report import HTML_FILE, PLOTLY_JS, write_html_report, write_plotly_js
-from lerobot_factorworld.study.report.markdown import decide_claims, render
+from lerobot_factorworld.study.report.markdown import render
 from lerobot_factorworld.study.report.published import report_table
 from lerobot_factorworld.study.results.aggregate import factor_gap_bootstrap, per_task_success, task_orderings
 from lerobot_factorworld.study.results.curve import pooled_curve
@@ -144,14 +145,14 @@ def write_episodes(out: Path, indices: int = 2) -> list[dict]:
 
 @pytest.fixture(scope="module")
 def study(tmp_path_factory):
-    """The synthetic study's report.html with its episodes: (cfg, rows, verdicts, folder)."""
+    """The synthetic study's report.html with its episodes: (cfg, rows, analysis, folder)."""
     cfg, rows = synthetic_study()
     out = tmp_path_factory.mktemp("html") / "synthetic"
     out.mkdir()
     write_episodes(out)
-    verdicts = decide_claims(cfg, rows)
-    write_html_report(cfg, rows, out, verdicts)
-    return cfg, rows, verdicts, out
+    analysis = analyze(cfg, rows)
+    write_html_report(cfg, rows, out, analysis)
+    return cfg, rows, analysis, out
 
 
 def figure(page: str, div_id: str, layout: bool = False):
@@ -189,7 +190,7 @@ def table_cells(page: str, after: str) -> list[list[str]]:
 
 
 def test_the_gap_figure_and_table_give_the_factor_ordering_tables_intervals_pooled_and_per_task(study):
-    cfg, rows, verdicts, out = study
+    cfg, rows, analysis, out = study
     page = (out / HTML_FILE).read_text()
     traces, layout = figure(page, "gap-figure", layout=True)
     drawn = intervals_drawn(traces, horizontal=True)
@@ -200,7 +201,7 @@ def test_the_gap_figure_and_table_give_the_factor_ordering_tables_intervals_pool
         assert drawn[task] == [b.intervals()[f][1:] for f in order]
     assert set(drawn) == {"all tasks", *TASKS}
     # the table beside it is report.md's Factor ordering table, cell for cell (the paper's rank included)
-    report = render(cfg, rows, [], "test", len(rows), verdicts=verdicts)
+    report = render(cfg, rows, [], "test", len(rows), analysis=analysis)
     markdown = [
         [c.strip() for c in line.strip("|").split("|")]
         for line in report_table(report, "Factor ordering").splitlines()[2:]
@@ -217,12 +218,13 @@ def test_the_gap_figure_and_table_give_the_factor_ordering_tables_intervals_pool
 
 
 def test_the_claims_are_the_decided_ones_and_report_md_prints_the_same(study):
-    cfg, rows, verdicts, out = study
+    cfg, rows, analysis, out = study
     page = (out / HTML_FILE).read_text()
+    verdicts = list(analysis.verdicts)
     assert verdicts, "the synthetic study tests the paper's ordering"
     cells = table_cells(page, 'id="claims"')
     assert cells == [list(row) for row in claim_rows(verdicts)]
-    report = render(cfg, rows, [], "test", len(rows), verdicts=verdicts)
+    report = render(cfg, rows, [], "test", len(rows), analysis=analysis)
     for row in claim_rows(verdicts):
         assert f"| **{row[4]}** |" in report
 
@@ -255,8 +257,8 @@ def test_the_viewer_inlines_episodes_json_and_every_video_is_next_to_the_page(st
 
 
 def test_without_episodes_the_viewer_says_how_to_record_them(study, tmp_path):
-    cfg, rows, verdicts, _ = study
-    page = write_html_report(cfg, rows, tmp_path, verdicts).read_text()
+    cfg, rows, analysis, _ = study
+    page = write_html_report(cfg, rows, tmp_path, analysis).read_text()
     viewer = page.split('<section id="episodes">')[1]
     assert "<video" not in page and "episodes-data" not in page
     assert "eval.record_episodes" in viewer and "episodes/episodes.json" in viewer
@@ -265,12 +267,12 @@ def test_without_episodes_the_viewer_says_how_to_record_them(study, tmp_path):
 def test_a_learning_curve_is_drawn_with_the_report_tables_intervals_and_only_where_there_is_one(study, tmp_path):
     """Two seeds' points of one checkpoint pool into one (as report.md's *Learning curve* table pools them), each
     point with that table's Wilson interval; a study without a curve has no such section."""
-    cfg, rows, verdicts, _ = study
+    cfg, rows, analysis, _ = study
     curve = [
         {"method": "bc", "task": "door-open", "epochs": e, "successes": k, "episodes": 10}
         for e, k in [(5, 2), (5, 4), (10, 9)]
     ]
-    page = write_html_report(cfg, rows, tmp_path, verdicts, curve).read_text()
+    page = write_html_report(cfg, rows, tmp_path, analysis, curve).read_text()
     assert '<a href="#curve">Learning curve</a>' in page
     (line,) = figure(page, "curve-figure")
     ends = [
@@ -280,15 +282,15 @@ def test_a_learning_curve_is_drawn_with_the_report_tables_intervals_and_only_whe
     assert line["name"] == "bc · door-open" and line["x"] == [5, 10]  # epochs to scale, not categories
     assert np.allclose(ends, [(p["ci_low"], p["ci_high"]) for p in pooled_curve(curve)])
     assert ends[0] == pytest.approx(wilson_interval(6, 20))
-    assert 'id="curve"' not in write_html_report(cfg, rows, tmp_path / "none", verdicts).read_text()
+    assert 'id="curve"' not in write_html_report(cfg, rows, tmp_path / "none", analysis).read_text()
 
 
 def test_the_page_is_deterministic_loads_nothing_from_the_network_and_writes_plotly_js_once(study, tmp_path):
-    cfg, rows, verdicts, _ = study
+    cfg, rows, analysis, _ = study
     (tmp_path / "a").mkdir()
     (tmp_path / "b").mkdir()
-    first = write_html_report(cfg, rows, tmp_path / "a", verdicts)
-    second = write_html_report(cfg, rows, tmp_path / "b", verdicts)
+    first = write_html_report(cfg, rows, tmp_path / "a", analysis)
+    second = write_html_report(cfg, rows, tmp_path / "b", analysis)
     assert first.read_bytes() == second.read_bytes()
     page = first.read_text()
     assert not re.search(r"""(src|href)=["']?(https?:)?//""", page), "the page loads something from the network"
@@ -311,13 +313,13 @@ def test_the_page_is_deterministic_loads_nothing_from_the_network_and_writes_plo
 
 
 def test_render_report_writes_report_html_and_decides_the_claims_once(monkeypatch, tmp_path):
-    from lerobot_factorworld.study.report import markdown
+    from lerobot_factorworld.study.analysis import study as analysis
     from lerobot_factorworld.study.report.write import render_report
 
     calls = []
-    decide = markdown.decide_together
-    monkeypatch.setattr(markdown, "decide_together", lambda *a: calls.append(1) or decide(*a))
-    monkeypatch.setattr("lerobot_factorworld.study.report.write.write_plots", lambda rows, cfg, out: [])
+    decide = analysis.decide_together
+    monkeypatch.setattr(analysis, "decide_together", lambda *a: calls.append(1) or decide(*a))
+    monkeypatch.setattr("lerobot_factorworld.study.report.write.write_plots", lambda rows, cfg, out, analysis: [])
     cfg, rows = synthetic_study()
     report, _ = render_report(cfg, rows, tmp_path, "test", len(rows))
     assert len(calls) == 1
@@ -357,9 +359,9 @@ def drawn_intervals(monkeypatch):
     monkeypatch.setattr(plots, "draw_intervals", record)
     for name, plotter in list(plots.PLOTTERS.items()):
 
-        def traced(rows, cfg, path, plotter=plotter, name=name):
+        def traced(rows, cfg, path, analysis, plotter=plotter, name=name):
             record.plot = name
-            return plotter(rows, cfg, path)
+            return plotter(rows, cfg, path, analysis)
 
         monkeypatch.setitem(plots.PLOTTERS, name, traced)
     return calls

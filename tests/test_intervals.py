@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from lerobot_factorworld.stats import bootstrap, power, proportions, ranks, summaries
+from lerobot_factorworld.study.analysis.study import analyze
 from lerobot_factorworld.study.paper import PAPER_FACTOR_RANKS
 from lerobot_factorworld.study.plan import power as plan_power
 from lerobot_factorworld.study.plan.config import StudyConfig
@@ -22,7 +23,6 @@ from lerobot_factorworld.study.report.markdown import (
     _radius_section,
 )
 from lerobot_factorworld.study.results import aggregate
-from lerobot_factorworld.study.results.claims import decide, study_claims
 
 FACTORS = list(PAPER_FACTOR_RANKS)
 HARDNESS = dict(zip(FACTORS, (0.3, 0.25, 0.15, 0.12, 0.05, 0.0, 0.0)))
@@ -325,8 +325,8 @@ def test_gap_against_n_matches_the_gap_table_and_resolves_a_gap_that_closes():
 def test_the_report_prints_intervals_for_rho_pairs_slopes_and_pooled_tables():
     cfg = config(methods=[{"name": "bc", "policy": {"type": "bc"}}])
     rows = study_rows()
-    verdicts = decide(study_claims(cfg), cfg, rows)
-    ordering = "\n".join(_ordering_section(cfg, rows, verdicts))
+    analysis = analyze(cfg, rows)  # the claims decided as decide(study_claims(cfg), cfg, rows) does
+    ordering = "\n".join(_ordering_section(cfg, rows, analysis))
     assert "95% interval (bootstrap)" in ordering
     assert "Spearman correlation with the paper's ordering over 7 factors: **" in ordering
     assert "95% interval [+" in ordering or "95% interval [-" in ordering
@@ -339,9 +339,9 @@ def test_the_report_prints_intervals_for_rho_pairs_slopes_and_pooled_tables():
     assert "95% bootstrap interval of the count" in pairs and "with the pooled one" in pairs
     assert "| bc | camera_pos+object_texture | " in pairs
     assert "slope per 0.025 m [95% interval]" in "\n".join(_radius_section(cfg, rows))
-    table = "\n".join(_per_task_table(cfg, rows))
+    table = "\n".join(_per_task_table(cfg, rows, analysis))
     assert "pooled over the 3 seed(s)" in table and "| bc | door-open | 5 | " in table
-    assert _ordering_section(cfg, rows, verdicts) == _ordering_section(cfg, rows, verdicts)  # deterministic
+    assert _ordering_section(cfg, rows, analysis) == _ordering_section(cfg, rows, analyze(cfg, rows))  # deterministic
     assert "Against the paper's ordering (decided in *The paper's claims* below)" in ordering
     assert _pairs_section(cfg, rows) == _pairs_section(cfg, rows)
 

@@ -311,9 +311,11 @@ def test_ordering_per_task_sets_each_method_s_spearman_against_the_first():
     difference to the first's, per task. On door-open the second method reverses the first's ordering (+1 to
     -1: -2); on pick-place both order the factors alike (difference 0). A third method is n/a where it has no
     rows or ties every gap."""
+    from lerobot_factorworld.study.analysis.study import StudyAnalysis
     from lerobot_factorworld.study.plan.config import StudyConfig
     from lerobot_factorworld.study.plan.grid import DEFAULT_WIDTHS
     from lerobot_factorworld.study.report.markdown import _ordering_per_task_section
+    from lerobot_factorworld.study.results.aggregate import task_orderings
 
     def row(method, task, seed, condition, successes):
         return {
@@ -352,7 +354,13 @@ def test_ordering_per_task_sets_each_method_s_spearman_against_the_first():
             {"name": "bc_tied", "policy": {"type": "bc", "augmentation": "color"}},
         ],
     )
-    lines = _ordering_per_task_section(cfg, rows)
+
+    def ordering_per_task(cfg, rows):  # these rows carry gaps only: the analysis' per-task orderings alone
+        tasks = [t for t in cfg.tasks if any(r["task"] == t for r in rows)]
+        orderings = task_orderings(rows, cfg.methods[0].name, cfg.shifted_factors(), tasks)
+        return _ordering_per_task_section(cfg, rows, StudyAnalysis(task_orderings=orderings))
+
+    lines = ordering_per_task(cfg, rows)
 
     def cells(label):  # the row's (point, low, high) per task
         (line,) = [x for x in lines if x.startswith(f"| {label} |")]
@@ -368,7 +376,7 @@ def test_ordering_per_task_sets_each_method_s_spearman_against_the_first():
     assert "| Spearman with the paper, bc_tied | n/a | n/a | |" in lines
     assert "| bc_tied minus bc | n/a | n/a | |" in lines
     one = replace(cfg, methods=cfg.methods[:1])
-    assert not [x for x in _ordering_per_task_section(one, rows) if "bc_none" in x]
+    assert not [x for x in ordering_per_task(one, rows) if "bc_none" in x]
 
 
 def test_test_environments_do_not_depend_on_the_other_conditions():

@@ -26,15 +26,12 @@ from ...core.io import atomic_write_text
 from ...protocol.conditions import TRAIN_SUITE
 from ...stats.bootstrap import BOOTSTRAP_RESAMPLES
 from ...stats.ranks import rank_hardest_first
+from ..analysis.study import StudyAnalysis
 from ..paper import PAPER_FACTOR_RANKS
 from ..plan.config import StudyConfig
 from ..results.aggregate import (
     Interval,
-    factor_gap_bootstrap,
     factor_ordering,
-    per_task_success,
-    stage_counts,
-    task_orderings,
 )
 from ..results.claims import ClaimVerdict
 from ..results.curve import CURVE_FILE, pooled_curve
@@ -83,12 +80,12 @@ def write_html_report(
     cfg: StudyConfig,
     rows: Sequence[dict],
     out_dir: str | Path,
-    verdicts: Sequence[ClaimVerdict],
+    analysis: StudyAnalysis,
     curve: Sequence[dict] = (),
     stopping: StoppingTable | None = None,
 ) -> Path:
     """Write ``out_dir/report.html`` (and ``plotly.min.js`` where the folder has no copy of it) from ``results.csv``
-    rows, the claims decided on them (``markdown.decide_claims``) and the learning curve's points (``curve.csv``'s
+    rows, their analysis (``analysis.study.analyze``: the intervals and claims report.md prints too) and the learning curve's points (``curve.csv``'s
     rows; none: no such section); the viewer reads ``out_dir/episodes/``. With ``stopping`` (an
     ``eval.episodes=auto`` evaluation), the page shows how each condition stopped, where episodes fail and the
     paired episodes only: every other section rests on fixed-n intervals, which that stopping invalidates."""
@@ -98,15 +95,15 @@ def write_html_report(
         sections = [
             ("stopping", "How each condition stopped",
              _p(stopping.note) + _table(stopping.columns, stopping.cells, numeric=(4, 6, 7, 8, 9))),
-            ("stages", "Where episodes fail", _stages_section(cfg, rows)),
+            ("stages", "Where episodes fail", _stages_section(cfg, analysis)),
             ("episodes", "Paired episodes", _viewer_section(out_dir)),
         ]  # fmt: skip
     else:
         sections = [
-            ("gaps", "Each factor's gap", _gap_section(cfg, rows)),
-            ("claims", "The paper's claims", _claims_section(verdicts)),
-            ("stages", "Where episodes fail", _stages_section(cfg, rows)),
-            ("success", "Success rates", _success_section(cfg, rows)),
+            ("gaps", "Each factor's gap", _gap_section(cfg, rows, analysis)),
+            ("claims", "The paper's claims", _claims_section(analysis.verdicts)),
+            ("stages", "Where episodes fail", _stages_section(cfg, analysis)),
+            ("success", "Success rates", _success_section(cfg, analysis)),
             *([("curve", "Learning curve", _curve_section(curve))] if curve else []),
             ("episodes", "Paired episodes", _viewer_section(out_dir)),
         ]
@@ -152,21 +149,21 @@ def _lead(cfg: StudyConfig, rows: Sequence[dict]) -> str:
     )
 
 
-def _gap_section(cfg: StudyConfig, rows: Sequence[dict]) -> str:
+def _gap_section(cfg: StudyConfig, rows: Sequence[dict], analysis: StudyAnalysis) -> str:
     if not rows or not cfg.factors:
         return _p("No factor was evaluated: this study has no gaps.")
     method = cfg.methods[0].name
     gaps = factor_ordering(rows, method, cfg.factors)
     if not gaps:
         return _p("No gap is defined yet (no shifted condition has its train cell).")
-    pooled = factor_gap_bootstrap(rows, method, cfg.factors)
+    pooled = analysis.gap_bootstraps[method]
     intervals = pooled.intervals()
     ranks = rank_hardest_first({f: v[0] for f, v in gaps.items()})
     factors = sorted(gaps, key=lambda f: ranks.get(f, 99))
     series = {"all tasks": {f: (gaps[f][0], *intervals[f][1:]) for f in factors if f in intervals}}
     tasks = [t for t in cfg.tasks if any(r["task"] == t for r in rows)]
     if len(tasks) > 1:
-        for task, b in task_orderings(rows, method, cfg.shifted_factors(), tasks).items():
+        for task, b in analysis.task_orderings.items():
             series[task] = b.intervals()
     labels = [f"{f} · paper {PAPER_FACTOR_RANKS[f]:g}" if f in PAPER_FACTOR_RANKS else f for f in factors]
     figure = _interval_figure(
@@ -189,7 +186,7 @@ def _gap_section(cfg: StudyConfig, rows: Sequence[dict]) -> str:
         f"(1 = hardest). Bars: {INTERVAL_CAPTION} ({whose})."
     )
     parts = [_figure(figure, caption), _table(ORDERING_COLUMNS, ordering_rows(gaps, pooled), numeric=(1, 2, 3, 4))]
-    others = {m.name: factor_gap_bootstrap(rows, m.name, cfg.factors).intervals() for m in cfg.methods[1:]}
+    others = {m.name: analysis.gap_bootstraps[m.name].intervals() for m in cfg.methods[1:]}
     others = {name: found for name, found in others.items() if found}
     if others:
         by_method = {method: intervals, **others}
@@ -232,8 +229,8 @@ def _claims_section(verdicts: Sequence[ClaimVerdict]) -> str:
     return "\n".join(parts)
 
 
-def _stages_section(cfg: StudyConfig, rows: Sequence[dict]) -> str:
-    counts = stage_counts(rows)
+def _stages_section(cfg: StudyConfig, analysis: StudyAnalysis) -> str:
+    counts = analysis.stage_counts
     if not counts:
         return _p("No evaluation of this study recorded its episodes' stages.")
     tables = stage_tables(cfg, counts)
@@ -269,8 +266,8 @@ def _stages_section(cfg: StudyConfig, rows: Sequence[dict]) -> str:
     return "\n".join(parts)
 
 
-def _success_section(cfg: StudyConfig, rows: Sequence[dict]) -> str:
-    pooled = per_task_success(rows, cfg.factors)
+def _success_section(cfg: StudyConfig, analysis: StudyAnalysis) -> str:
+    pooled = analysis.per_task_success
     if not pooled:
         return _p("No evaluation has finished yet.")
     conditions = [c for c in (TRAIN_SUITE, *cfg.factors) if any(k[3] == c for k in pooled)]

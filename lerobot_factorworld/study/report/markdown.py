@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import math
 from collections import Counter, defaultdict
-from collections.abc import Callable, Iterable, Sequence
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from pathlib import Path
 
 from ...core.provenance import UNKNOWN
@@ -15,6 +15,7 @@ from ...protocol.conditions import TRAIN_SUITE
 from ...stats.bootstrap import BOOTSTRAP_RESAMPLES, BOOTSTRAP_SEED
 from ...stats.ranks import rank_hardest_first, rerank, spearman
 from ...tasks import step_limit
+from ..analysis.study import StudyAnalysis, analyze
 from ..paper import (
     PAPER_FACTOR_GROUPS,
     PAPER_FACTOR_RANKS,
@@ -29,7 +30,6 @@ from ..results.aggregate import (
     ALL_FACTORS,
     RADIUS_STEP_M,
     FactorGapBootstrap,
-    factor_gap_bootstrap,
     factor_ordering,
     gap_against_n,
     gap_per_factor_and_n,
@@ -41,16 +41,12 @@ from ..results.aggregate import (
     pair_bands,
     pair_rows,
     pair_summary,
-    per_task_success,
     radius_rows,
     radius_slopes,
     shared_cell_count,
-    stage_counts,
     success_per_condition_and_n,
     summary,
-    task_orderings,
 )
-from ..results.claims import ClaimVerdict, decide_together, study_claims
 from ..results.rows import RESULTS_FILE, commit_name
 from ..run.inputs import MERGED_FRAMES
 from .claims_markdown import claims_section, ordering_sentence
@@ -97,13 +93,14 @@ def render(
     command: str,
     planned: int,
     family_sections: Callable[[str], list[str]] = lambda part: [],
-    verdicts: Sequence[ClaimVerdict] | None = None,
+    analysis: StudyAnalysis | None = None,
     finding_studies: Sequence[str] = (),
 ) -> str:
     """The text of ``report.md`` from the rows of ``results.csv`` (``planned``: the plan's evaluations);
     ``family_sections(part)`` gives the task families' own sections (``part``: ``FAMILY_RESULTS`` after the
-    factor ordering, ``FAMILY_DETAILS`` at the end); ``verdicts``: the claims decided on ``rows``
-    (:func:`decide_claims`; computed here when not given); ``finding_studies``: the other studies of its finding
+    factor ordering, ``FAMILY_DETAILS`` at the end); ``analysis``: ``rows``' analysis, claims included
+    (``analysis.study.analyze``, which ``write.py`` builds once for every view; built here when not given);
+    ``finding_studies``: the other studies of its finding
     they were corrected with."""
     details = family_sections(FAMILY_DETAILS)
     ev = cfg.eval
@@ -155,10 +152,10 @@ def render(
     unequal = [r for r in rows if r["episodes"] % r["n_envs"] or r["envs_visited"] != r["n_envs"]]
     if unequal:
         lines += [f"**Coverage:** {len(unequal)} row(s) did not visit their environments equally.", ""]
-    verdicts = decide_claims(cfg, rows) if verdicts is None else list(verdicts)
-    lines += _ordering_section(cfg, rows, verdicts)
-    lines += claims_section(verdicts, cfg.finding, finding_studies)
-    lines += _ordering_per_task_section(cfg, rows)
+    analysis = analyze(cfg, rows) if analysis is None else analysis
+    lines += _ordering_section(cfg, rows, analysis)
+    lines += claims_section(list(analysis.verdicts), cfg.finding, finding_studies)
+    lines += _ordering_per_task_section(cfg, rows, analysis)
     lines += family_sections(FAMILY_RESULTS)
     lines += _gap_table(cfg, rows)
     lines += _gap_against_n_section(cfg, rows)
@@ -166,8 +163,8 @@ def render(
     lines += _pairs_section(cfg, rows)
     lines += _radius_section(cfg, rows)
     lines += _success_table(cfg, rows)
-    lines += _per_task_table(cfg, rows)
-    lines += _stages_section(cfg, rows)
+    lines += _per_task_table(cfg, rows, analysis)
+    lines += _stages_section(cfg, analysis)
     lines += _cells_table(rows)
     lines += ["## Plots", ""]
     for path in plots:
@@ -179,17 +176,6 @@ def render(
         why += [f"{p} (drawn only with {DRAWN_WHEN[p]})" for p in missing if p in DRAWN_WHEN]
         lines += [f"Not drawn: {'; '.join(why)}.", ""]
     return "\n".join(lines) + "\n" + "\n".join(details)
-
-
-def decide_claims(
-    cfg: StudyConfig, rows: Sequence[dict], companions: Sequence[tuple[StudyConfig, Sequence[dict]]] = ()
-) -> list[ClaimVerdict]:
-    """The study's claims decided on ``rows`` (none without rows), corrected together with those of
-    ``companions``, the other studies of its finding: what report.md and report.html both print."""
-    if not rows:
-        return []
-    studies = [(study_claims(cfg), cfg, rows), *((study_claims(c), c, r) for c, r in companions if r)]
-    return decide_together(studies)[0]
 
 
 def commit_line(rows: Sequence[dict]) -> str:
@@ -262,14 +248,14 @@ def _training_text(cfg: StudyConfig) -> str:
     return ", ".join(f"{name} {value}" for name, value in texts.items())
 
 
-def _ordering_section(cfg: StudyConfig, rows: list[dict], verdicts: list[ClaimVerdict]) -> list[str]:
+def _ordering_section(cfg: StudyConfig, rows: list[dict], analysis: StudyAnalysis) -> list[str]:
     if not cfg.factors:  # e.g. a profile of the `train` condition alone
         return []
     method = cfg.methods[0].name
     gaps = factor_ordering(rows, method, cfg.factors)
     ours = rank_hardest_first({f: v[0] for f, v in gaps.items()})
     rho = spearman(ours, PAPER_FACTOR_RANKS)
-    bootstrap = factor_gap_bootstrap(rows, method, cfg.factors)  # one resampling for every interval below
+    bootstrap = analysis.gap_bootstraps[method]  # one resampling for every interval below
     lines = [
         f"## Factor ordering ({method}, mean gap over tasks and N)",
         "",
@@ -310,7 +296,7 @@ def _ordering_section(cfg: StudyConfig, rows: list[dict], verdicts: list[ClaimVe
             f"{ci(*diff[1:], digits=2)} against {method}'s (bootstrap; one resampling of both, on the "
             f"{shared_cell_count(rows, [method, other])} cells (task, N, seed, condition) both have)."
         )
-    sentence = ordering_sentence(verdicts)
+    sentence = ordering_sentence(list(analysis.verdicts))
     if sentence:
         lines.append(sentence)
     lines.append(PAPER_ORDERING)
@@ -342,14 +328,14 @@ def ordering_rows(gaps: dict[str, tuple[float, float]], bootstrap: FactorGapBoot
     return out
 
 
-def _ordering_per_task_section(cfg: StudyConfig, rows: list[dict]) -> list[str]:
+def _ordering_per_task_section(cfg: StudyConfig, rows: list[dict], analysis: StudyAnalysis) -> list[str]:
     """Each task's own ordering (the first method's mean gap per factor, its rank and Spearman's rho with the
     paper's), so a pooled ordering that one task makes is seen as such."""
     tasks = [t for t in cfg.tasks if any(r["task"] == t for r in rows)]
     if len(tasks) < 2 or len(cfg.shifted_factors()) < 2:
         return []
     method = cfg.methods[0].name
-    per_task = task_orderings(rows, method, cfg.shifted_factors(), tasks)
+    per_task = analysis.task_orderings
     other_methods = _method_rho_rows_per_task(cfg, rows, tasks)
     lines = [
         f"## Ordering per task ({method})",
@@ -735,10 +721,10 @@ def _success_table(cfg: StudyConfig, rows: list[dict]) -> list[str]:
     return lines
 
 
-def _per_task_table(cfg: StudyConfig, rows: list[dict]) -> list[str]:
+def _per_task_table(cfg: StudyConfig, rows: list[dict], analysis: StudyAnalysis) -> list[str]:
     """Success per task and N of the main grid's train and single-factor conditions, pooled over seeds."""
     conditions = [TRAIN_SUITE, *cfg.factors]
-    pooled = per_task_success(rows, cfg.factors)
+    pooled = analysis.per_task_success
     if not pooled:
         return []
     seeds = len({r["seed"] for r in rows})
@@ -785,10 +771,10 @@ def stages_note(names: Iterable[str] = ()) -> str:
     )
 
 
-def _stages_section(cfg: StudyConfig, rows: list[dict]) -> list[str]:
+def _stages_section(cfg: StudyConfig, analysis: StudyAnalysis) -> list[str]:
     """Where episodes fail: per method x task x N x condition, the share of episodes by furthest stage, one
     table per list of stages (tasks of one kind share a table); nothing when no row has stage counts."""
-    counts = stage_counts(rows)
+    counts = analysis.stage_counts
     if not counts:
         return []
     tables = stage_tables(cfg, counts)
@@ -804,7 +790,7 @@ def _stages_section(cfg: StudyConfig, rows: list[dict]) -> list[str]:
     return lines
 
 
-def stage_tables(cfg: StudyConfig, counts: dict[tuple, dict[str, int]]) -> dict[tuple[str, ...], list[tuple]]:
+def stage_tables(cfg: StudyConfig, counts: Mapping[tuple, Mapping[str, int]]) -> dict[tuple[str, ...], list[tuple]]:
     """The rows of the "Where episodes fail" tables: per list of stage names (tasks of one kind share one), the
     keys (method, task, N, condition) of ``aggregate.stage_counts`` in the report's order, ``train`` first."""
     order = [TRAIN_SUITE, *cfg.conditions()]

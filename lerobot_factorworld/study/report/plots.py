@@ -12,20 +12,18 @@ from pathlib import Path
 
 from ...protocol.conditions import TRAIN_SUITE
 from ...stats.ranks import rank_hardest_first
+from ..analysis.study import StudyAnalysis, analyze
 from ..paper import PAPER_PAIR_TOLERANCE
 from ..plan.config import StudyConfig
 from ..results.aggregate import (
     RADIUS_STEP_M,
     Interval,
-    factor_gap_bootstrap,
     gap_against_n,
     gap_per_radius,
     pair_rows,
     pair_summary,
-    per_task_success,
     radius_slopes,
     summary,
-    task_orderings,
     tasks_disagree,
 )
 
@@ -95,7 +93,7 @@ def draw_intervals(ax, xs: Sequence[float], found: Sequence[Interval], horizonta
         ax.plot(xs, end, marker="_", ls="none", color=line.get_color(), ms=8)
 
 
-def plot_gap_vs_n(rows, cfg: StudyConfig, path: Path) -> bool:
+def plot_gap_vs_n(rows, cfg: StudyConfig, path: Path, analysis: StudyAnalysis) -> bool:
     found = {m.name: gap_against_n(rows, m.name, cfg.shifted_factors()) for m in cfg.methods}
     found = {method: g for method, g in found.items() if g is not None}
     if not found:  # fewer than two N
@@ -124,7 +122,7 @@ def plot_gap_vs_n(rows, cfg: StudyConfig, path: Path) -> bool:
     return save_figure(fig, path)
 
 
-def plot_gap_vs_radius(rows, cfg: StudyConfig, path: Path) -> bool:
+def plot_gap_vs_radius(rows, cfg: StudyConfig, path: Path, analysis: StudyAnalysis) -> bool:
     stats = gap_per_radius(rows, cfg.radius_factors)  # (method, factor, radius): the radius table's
     if not cfg.radius_factors or not stats:
         return False
@@ -156,7 +154,7 @@ def plot_gap_vs_radius(rows, cfg: StudyConfig, path: Path) -> bool:
     return save_figure(fig, path)
 
 
-def plot_pairs(rows, cfg: StudyConfig, path: Path) -> bool:
+def plot_pairs(rows, cfg: StudyConfig, path: Path, analysis: StudyAnalysis) -> bool:
     """Left: the paper's pair metric per cell and pooled with their intervals (undefined ones stay empty);
     right: the interaction, always defined."""
     method = cfg.methods[0].name
@@ -188,8 +186,8 @@ def plot_pairs(rows, cfg: StudyConfig, path: Path) -> bool:
     return save_figure(fig, path)
 
 
-def plot_methods(rows, cfg: StudyConfig, path: Path) -> bool:
-    found = {m.name: factor_gap_bootstrap(rows, m.name, cfg.factors).intervals() for m in cfg.methods}
+def plot_methods(rows, cfg: StudyConfig, path: Path, analysis: StudyAnalysis) -> bool:
+    found = {name: b.intervals() for name, b in analysis.gap_bootstraps.items()}
     found = {method: intervals for method, intervals in found.items() if intervals}
     if not found:
         return False
@@ -212,15 +210,15 @@ def plot_methods(rows, cfg: StudyConfig, path: Path) -> bool:
     return save_figure(fig, path)
 
 
-def plot_ordering_per_task(rows, cfg: StudyConfig, path: Path) -> bool:
+def plot_ordering_per_task(rows, cfg: StudyConfig, path: Path, analysis: StudyAnalysis) -> bool:
     factors = cfg.shifted_factors()
     if len(cfg.tasks) < 2 or len(factors) < 2:
         return False
     method = cfg.methods[0].name
-    orderings = {t: b for t, b in task_orderings(rows, method, factors, cfg.tasks).items() if b.names}
+    orderings = {t: b for t, b in analysis.task_orderings.items() if b.names}
     if len(orderings) < 2 or not tasks_disagree(orderings):
         return False
-    pooled = factor_gap_bootstrap(rows, method, factors)
+    pooled = analysis.shifted_bootstrap
     ranks = rank_hardest_first(dict(zip(pooled.names, pooled.point.tolist())))
     shown = sorted(dict.fromkeys(f for b in orderings.values() for f in b.names), key=lambda f: ranks.get(f, math.inf))
     plt = pyplot()
@@ -240,8 +238,8 @@ def plot_ordering_per_task(rows, cfg: StudyConfig, path: Path) -> bool:
     return save_figure(fig, path)
 
 
-def plot_success_rates(rows, cfg: StudyConfig, path: Path) -> bool:
-    pooled = per_task_success(rows, cfg.factors)  # the "Success per task and N" table's
+def plot_success_rates(rows, cfg: StudyConfig, path: Path, analysis: StudyAnalysis) -> bool:
+    pooled = analysis.per_task_success  # the "Success per task and N" table's
     if not pooled:
         return False
     conditions = [TRAIN_SUITE, *cfg.factors]
@@ -285,7 +283,8 @@ def save_figure(fig, path: Path) -> bool:
     return True
 
 
-PLOTTERS: dict[str, Callable[[Sequence[dict], StudyConfig, Path], bool]] = {
+# each plotter draws from the rows and their analysis (what it shares with report.md and report.html)
+PLOTTERS: dict[str, Callable[[Sequence[dict], StudyConfig, Path, StudyAnalysis], bool]] = {
     "gap_vs_n.png": plot_gap_vs_n,
     "gap_vs_radius.png": plot_gap_vs_radius,
     "pairs.png": plot_pairs,
@@ -295,12 +294,16 @@ PLOTTERS: dict[str, Callable[[Sequence[dict], StudyConfig, Path], bool]] = {
 }
 
 
-def write_plots(rows: Sequence[dict], cfg: StudyConfig, study_dir: Path) -> list[Path]:
-    """Draw every plot there is data for into ``study_dir`` (stale ones removed); the paths drawn."""
+def write_plots(
+    rows: Sequence[dict], cfg: StudyConfig, study_dir: Path, analysis: StudyAnalysis | None = None
+) -> list[Path]:
+    """Draw every plot there is data for into ``study_dir`` (stale ones removed); the paths drawn. ``analysis``:
+    the rows' (``write.py`` builds it once for every view; built here when not given)."""
+    analysis = analyze(cfg, rows) if analysis is None else analysis
     drawn = []
     for name in PLOTS:
         path = study_dir / name
         path.unlink(missing_ok=True)
-        if rows and PLOTTERS[name](rows, cfg, path):
+        if rows and PLOTTERS[name](rows, cfg, path, analysis):
             drawn.append(path)
     return drawn

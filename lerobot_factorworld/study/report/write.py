@@ -26,6 +26,7 @@ import yaml
 from ...core.io import atomic_write_text
 from ...core.settings import parse_config
 from ...families import family_of
+from ..analysis.study import analyze
 from ..plan.command import ReportedStudy
 from ..plan.config import StudyConfig, write_run_config
 from ..plan.grid import Plan, make_plan
@@ -41,7 +42,7 @@ from .curve_report import CURVE_PLOT, curve_section, plot_curve
 from .episode_videos import MANIFEST, collect_videos
 from .family_report import FamilyReport, report_of
 from .html_report import StoppingTable, write_html_report
-from .markdown import FAMILY_DETAILS, REPORT_FILE, _stages_section, decide_claims, render
+from .markdown import FAMILY_DETAILS, REPORT_FILE, _stages_section, render
 from .plots import write_plots
 from .stopping_report import STOP_COLUMNS, STOPPED_NOTE, render_auto, rule_text, stop_cells
 
@@ -95,17 +96,19 @@ def render_report(
     corrected with its own: :func:`finding_companions`); report.md's and the plots' paths."""
     if not cfg.trained_methods():  # a profile of given checkpoints: its results for their model pages
         write_eval_results(cfg, rows, out_dir)
+    analysis = analyze(cfg, rows, companions)  # once, for the plots, report.md and report.html
     if cfg.eval.auto:  # intervals valid under the stopping only: none of the fixed-n sections, plots or page
-        text = render_auto(cfg, rows, command, planned, _stages_section(cfg, rows))
+        text = render_auto(cfg, rows, command, planned, _stages_section(cfg, analysis))
         if tail:
             text = text.rstrip("\n") + "\n\n" + "\n".join(tail)
         note = f"Every interval is {INTERVAL_LABEL}: {rule_text(cfg)}. " + STOPPED_NOTE.format(
             tolerance=cfg.eval.tolerance, budget=cfg.eval.max_episodes
         )
-        write_html_report(cfg, rows, out_dir, [], stopping=StoppingTable(note, STOP_COLUMNS, stop_cells(cfg, rows)))
+        write_html_report(
+            cfg, rows, out_dir, analysis, stopping=StoppingTable(note, STOP_COLUMNS, stop_cells(cfg, rows))
+        )
         return atomic_write_text(out_dir / REPORT_FILE, text), []
-    plots = write_plots(rows, cfg, out_dir)
-    verdicts = decide_claims(cfg, rows, companions)  # once, for both reports
+    plots = write_plots(rows, cfg, out_dir, analysis)
     families = families_of(cfg)
     (out_dir / CURVE_PLOT).unlink(missing_ok=True)
     curve = read_curve(out_dir / CURVE_FILE) if cfg.curve_methods() and (out_dir / CURVE_FILE).is_file() else []
@@ -122,10 +125,10 @@ def render_report(
         ]
 
     others = [c.name for c, _ in companions]
-    text = render(cfg, rows, plots, command, planned, family_sections, verdicts, others)
+    text = render(cfg, rows, plots, command, planned, family_sections, analysis, others)
     if tail:
         text = text.rstrip("\n") + "\n\n" + "\n".join(tail)
-    write_html_report(cfg, rows, out_dir, verdicts, curve)
+    write_html_report(cfg, rows, out_dir, analysis, curve)
     return atomic_write_text(out_dir / REPORT_FILE, text), plots
 
 
